@@ -1,0 +1,453 @@
+"""Loading protocols: the quasi-static confinement ramp of the paper's Section II.
+
+The trap strength λ is raised stage by stage; at every stage the energy is minimised to
+equilibrium starting from the previous stage's equilibrium. The wire starts straight, centred
+on the trap, with a seeded small transverse perturbation. Replicas draw independent random
+streams from one seed (:meth:`numpy.random.SeedSequence.spawn`), so results do not depend on
+the number of worker processes.
+
+Replica-to-replica variety: the paper's comes from random Powell directions. A minimiser that
+reaches equilibrium is deterministic, so here it comes from (i) the initial transverse noise,
+which picks the buckling direction and the folding sequence, and optionally (ii) a random
+displacement of every node at each stage (``stage_noise``), scaled down by continuous collision
+detection so that it can never make the wire cross itself.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .energy import EnergyTerms, WireEnergy
+from .geometry import has_crossings, max_safe_fraction
+from .minimize import MinimizeResult, newton, powell
+from .model import Wire
+
+__all__ = [
+    "PAPER_LAMBDAS",
+    "Ramp",
+    "RampResult",
+    "Stage",
+    "default_schedule",
+    "initial_state",
+    "minimize_wire",
+    "replica_seeds",
+    "run_ramp",
+    "run_replicas",
+]
+
+#: The trap strengths shown in the paper's Fig. 2.
+PAPER_LAMBDAS = (70.0, 200.0, 300.0, 1000.0)
+
+Method = Literal["newton", "powell"]
+
+
+def default_schedule(
+    lam_min: float = 1.0,
+    lam_max: float = 2000.0,
+    n: int = 40,
+    include: Sequence[float] = PAPER_LAMBDAS,
+) -> tuple[float, ...]:
+    """Geometric λ schedule from ``lam_min`` to ``lam_max`` with ``include`` merged in.
+
+    The default (1 to 2000, 40 geometric steps, plus the paper's 70, 200, 300 and 1000) has 44
+    stages: the paper's Table 1 range.
+
+    >>> s = default_schedule()
+    >>> len(s), s[0], s[-1], 1000.0 in s
+    (44, 1.0, 2000.0, True)
+    """
+    if not (0 < lam_min < lam_max) or not (math.isfinite(lam_max)):
+        raise ValueError(f"need 0 < lam_min < lam_max, got {lam_min}, {lam_max}")
+    if n < 2:
+        raise ValueError(f"n must be >= 2, got {n}")
+    values = set(np.geomspace(lam_min, lam_max, n).round(10).tolist())
+    values.update(float(v) for v in include if lam_min <= v <= lam_max)
+    return tuple(sorted(values))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Ramp:
+    """A quasi-static confinement ramp.
+
+    Parameters
+    ----------
+    lambdas : sequence of float
+        Trap strengths, strictly increasing, >= 0. Default :func:`default_schedule`.
+    initial_noise : float
+        Standard deviation of the transverse displacement of each node of the initial straight
+        wire, in units of the segment rest length. Default 0.01.
+    stage_noise : float
+        Standard deviation of a random displacement of each node before every stage, in units
+        of the segment rest length (0: none, the default).
+    stop_tol : float or None
+        Stop early when no node moved by more than this ``[length]`` between two successive
+        stages ("the structure no longer changes"). None: run every stage.
+    method : {"newton", "powell"}
+        ``newton`` reaches equilibrium (default); ``powell`` is the paper's method.
+    ftol : float
+        Equilibrium: largest node force ``[energy/length]`` at most ``ftol``. Default 1e-6.
+    maxiter : int
+        Iterations per stage (Newton iterations, or Powell sweeps).
+    max_step : float
+        Largest node displacement per Newton step, in units of the segment rest length.
+
+    Examples
+    --------
+    >>> Ramp(lambdas=(1, 10, 100)).lambdas
+    (1.0, 10.0, 100.0)
+    >>> Ramp(lambdas=(10, 1))
+    Traceback (most recent call last):
+    ...
+    ValueError: lambdas must be strictly increasing, got (10, 1)
+    """
+
+    lambdas: tuple[float, ...] = field(default_factory=default_schedule)
+    initial_noise: float = 0.01
+    stage_noise: float = 0.0
+    stop_tol: float | None = None
+    method: Method = "newton"
+    ftol: float = 1e-6
+    maxiter: int = 500
+    max_step: float = 0.5
+
+    def __post_init__(self):
+        try:
+            lams = tuple(float(v) for v in self.lambdas)
+        except (TypeError, ValueError):
+            raise ValueError(f"lambdas must be numbers, got {self.lambdas!r}") from None
+        if not lams:
+            raise ValueError("lambdas must not be empty")
+        if not all(math.isfinite(v) and v >= 0 for v in lams):
+            raise ValueError(f"lambdas must be finite and >= 0, got {self.lambdas!r}")
+        if any(b <= a for a, b in zip(lams, lams[1:], strict=False)):
+            raise ValueError(f"lambdas must be strictly increasing, got {self.lambdas!r}")
+        object.__setattr__(self, "lambdas", lams)
+        for name in ("initial_noise", "stage_noise"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if self.stop_tol is not None and not (self.stop_tol > 0):
+            raise ValueError(f"stop_tol must be positive or None, got {self.stop_tol!r}")
+        if self.method not in ("newton", "powell"):
+            raise ValueError(f"method must be 'newton' or 'powell', got {self.method!r}")
+        if not (math.isfinite(self.ftol) and self.ftol > 0):
+            raise ValueError(f"ftol must be positive, got {self.ftol!r}")
+        if int(self.maxiter) < 1:
+            raise ValueError(f"maxiter must be >= 1, got {self.maxiter!r}")
+        if not (math.isfinite(self.max_step) and self.max_step > 0):
+            raise ValueError(f"max_step must be positive, got {self.max_step!r}")
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["lambdas"] = list(self.lambdas)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Ramp:
+        unknown = set(d) - set(cls.__dataclass_fields__)
+        if unknown:
+            raise ValueError(f"unknown ramp parameter(s): {', '.join(sorted(unknown))}")
+        return cls(**d)
+
+
+@dataclass(frozen=True, slots=True)
+class Stage:
+    """One stage of a ramp: the trap strength, the configuration reached and how."""
+
+    lam: float
+    positions: np.ndarray
+    energy: EnergyTerms
+    result: MinimizeResult
+
+
+@dataclass(frozen=True, slots=True)
+class RampResult:
+    """The stages of one ramp, in order, with what produced them."""
+
+    wire: Wire
+    ramp: Ramp
+    initial: np.ndarray
+    stages: tuple[Stage, ...]
+    seconds: float
+
+    @property
+    def lambdas(self) -> np.ndarray:
+        return np.array([s.lam for s in self.stages])
+
+    @property
+    def converged(self) -> bool:
+        """Every stage reached equilibrium."""
+        return all(s.result.converged for s in self.stages)
+
+    @property
+    def failed_stages(self) -> list[tuple[float, str]]:
+        """(λ, the minimiser's message) of every stage that did not reach equilibrium."""
+        return [(s.lam, s.result.message) for s in self.stages if not s.result.converged]
+
+    def energies(self) -> dict[str, np.ndarray]:
+        """Energy by term at every stage, arrays of shape (n_stages,)."""
+        keys = ("bending", "stretching", "confinement", "hard_core", "total")
+        return {k: np.array([s.energy.to_dict()[k] for s in self.stages]) for k in keys}
+
+    def at(self, lam: float) -> Stage:
+        """The stage at trap strength ``lam`` (exactly one of the ramp's values)."""
+        for s in self.stages:
+            if s.lam == float(lam):
+                return s
+        raise KeyError(f"no stage at lambda = {lam}; stages: {[s.lam for s in self.stages]}")
+
+
+def _rng(seed) -> np.random.Generator:
+    if isinstance(seed, np.random.Generator):
+        return seed
+    return np.random.default_rng(seed)
+
+
+def initial_state(wire: Wire, noise: float = 0.01, *, seed=None) -> np.ndarray:
+    """A straight wire along x, centred on the trap, with a small random transverse kink.
+
+    Node ``i`` sits at ``(-L0/2 + i L0/N, 0) + c`` plus a Gaussian transverse displacement of
+    standard deviation ``noise * L0/N``. Never crosses itself for ``noise < 0.5`` (a transverse
+    displacement keeps the x order of the nodes).
+
+    Returns
+    -------
+    ndarray, shape (wire.n_nodes, 2)
+        ``[length]``
+
+    >>> x = initial_state(Wire(k_b=5, k_s=5e5, n_segments=4), noise=0.0)
+    >>> x.tolist()
+    [[-0.5, 0.0], [-0.25, 0.0], [0.0, 0.0], [0.25, 0.0], [0.5, 0.0]]
+    """
+    if not (math.isfinite(noise) and 0 <= noise < 0.5):
+        raise ValueError(f"initial noise must be in [0, 0.5), got {noise}")
+    rng = _rng(seed)
+    n = wire.n_nodes
+    x = np.zeros((n, 2))
+    x[:, 0] = np.linspace(-0.5 * wire.length, 0.5 * wire.length, n)
+    x[:, 1] = noise * wire.rest_length * rng.standard_normal(n)
+    x += np.asarray(wire.trap_center)
+    return x
+
+
+def minimize_wire(
+    wire: Wire,
+    positions,
+    lam: float,
+    *,
+    method: Method = "newton",
+    ftol: float = 1e-6,
+    maxiter: int = 500,
+    max_step: float = 0.5,
+    rng: np.random.Generator | None = None,
+) -> MinimizeResult:
+    """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
+
+    Newton: every step is limited by continuous collision detection
+    (:func:`crumple.geometry.max_safe_fraction`) and every accepted configuration is checked
+    by the exact crossing test, so the wire cannot pass through itself. Powell: crossing
+    configurations get energy +inf.
+
+    Parameters
+    ----------
+    wire : Wire
+    positions : array_like, shape (wire.n_nodes, 2)
+        Start ``[length]``, must not cross itself.
+    lam : float
+        Trap strength λ.
+    method : {"newton", "powell"}
+    ftol : float
+        Equilibrium tolerance on the largest node force ``[energy/length]``.
+    maxiter : int
+    max_step : float
+        Newton: largest node displacement per step in units of the segment rest length.
+    rng : numpy.random.Generator
+        Powell's random directions (required for Powell).
+
+    Examples
+    --------
+    >>> w = Wire(k_b=5, k_s=5e5, n_segments=20)
+    >>> r = minimize_wire(w, initial_state(w, seed=0), lam=1.0)
+    >>> r.converged
+    True
+    """
+    energy = WireEnergy(wire, lam)
+    x0 = np.array(positions, dtype=np.float64)
+    if x0.shape != (wire.n_nodes, 2):
+        raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
+    if has_crossings(x0):
+        raise ValueError("the starting configuration crosses itself")
+
+    def feasible(x):
+        return not has_crossings(x)
+
+    if method == "newton":
+        return newton(
+            energy,
+            x0,
+            hess=energy.hessian,
+            ftol=ftol,
+            maxiter=maxiter,
+            max_step=max_step * wire.rest_length,
+            step_limit=max_safe_fraction,
+            feasible=feasible,
+        )
+    if method == "powell":
+        if rng is None:
+            raise ValueError("Powell needs a random generator for its directions (rng=...)")
+        return powell(
+            lambda x: energy(x)[0],
+            x0,
+            rng=rng,
+            gradient=lambda x: energy(x)[1],
+            feasible=feasible,
+            ftol=ftol,
+            maxiter=maxiter,
+        )
+    raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
+
+
+ProgressCallback = Callable[[int, int, Stage], None]
+
+
+def run_ramp(
+    wire: Wire,
+    ramp: Ramp | None = None,
+    *,
+    seed=None,
+    progress: ProgressCallback | None = None,
+) -> RampResult:
+    """Run a quasi-static ramp: raise λ stage by stage, minimising at each.
+
+    Parameters
+    ----------
+    wire : Wire
+    ramp : Ramp, optional
+        Default :class:`Ramp` ().
+    seed : int, SeedSequence or Generator, optional
+        Source of the initial noise, the stage noise and Powell's directions.
+    progress : callable, optional
+        ``progress(i, n_stages, stage)`` after every stage.
+
+    Returns
+    -------
+    RampResult
+        Check ``result.converged`` and ``result.failed_stages``: a stage that did not reach
+        equilibrium is kept and reported, never hidden.
+
+    Examples
+    --------
+    >>> w = Wire(k_b=5, k_s=5e5, n_segments=30)
+    >>> r = run_ramp(w, Ramp(lambdas=(1, 10, 100)), seed=1)
+    >>> r.converged, len(r.stages)
+    (True, 3)
+    """
+    ramp = Ramp() if ramp is None else ramp
+    rng = _rng(seed)
+    t0 = time.perf_counter()
+    x = initial_state(wire, ramp.initial_noise, seed=rng)
+    initial = x.copy()
+    stages: list[Stage] = []
+    for i, lam in enumerate(ramp.lambdas):
+        if ramp.stage_noise > 0:
+            kick = ramp.stage_noise * wire.rest_length * rng.standard_normal(x.shape)
+            safe = max_safe_fraction(x, kick)
+            x = x + (kick if safe >= 1.0 else 0.5 * safe * kick)
+        res = minimize_wire(
+            wire,
+            x,
+            lam,
+            method=ramp.method,
+            ftol=ramp.ftol,
+            maxiter=ramp.maxiter,
+            max_step=ramp.max_step,
+            rng=rng,
+        )
+        moved = float(np.max(np.hypot(*(res.x - x).T)))
+        x = res.x
+        stage = Stage(lam=lam, positions=x, energy=WireEnergy(wire, lam).terms(x), result=res)
+        stages.append(stage)
+        if progress is not None:
+            progress(i, len(ramp.lambdas), stage)
+        if ramp.stop_tol is not None and i > 0 and moved < ramp.stop_tol and res.converged:
+            break
+    return RampResult(
+        wire=wire,
+        ramp=ramp,
+        initial=initial,
+        stages=tuple(stages),
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _replica_job(args):
+    wire, ramp, seed_seq = args
+    return run_ramp(wire, ramp, seed=np.random.default_rng(seed_seq))
+
+
+def replica_seeds(seed, n_replicas: int) -> list[np.random.SeedSequence]:
+    """Independent seed sequences for ``n_replicas`` replicas of one base seed.
+
+    >>> [s.spawn_key for s in replica_seeds(7, 3)]
+    [(0,), (1,), (2,)]
+    """
+    if int(n_replicas) < 1:
+        raise ValueError(f"n_replicas must be >= 1, got {n_replicas}")
+    base = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    return base.spawn(int(n_replicas))
+
+
+def run_replicas(
+    wire: Wire,
+    ramp: Ramp | None = None,
+    *,
+    n_replicas: int = 10,
+    seed: int | None = 0,
+    workers: int | None = 1,
+    progress: Callable[[int, int, RampResult], None] | None = None,
+) -> list[RampResult]:
+    """Independent replicas of a ramp, optionally in parallel processes.
+
+    Replica ``r`` uses ``SeedSequence(seed).spawn(n_replicas)[r]``, so the results do not depend
+    on ``workers``.
+
+    Parameters
+    ----------
+    workers : int or None
+        Processes; 1 runs in this process, None uses every available core.
+    progress : callable, optional
+        ``progress(done, n_replicas, result)`` as replicas finish.
+    """
+    ramp = Ramp() if ramp is None else ramp
+    seeds = replica_seeds(seed, n_replicas)
+    jobs = [(wire, ramp, s) for s in seeds]
+    if workers is None:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    workers = max(1, min(int(workers), len(jobs)))
+    out: list[RampResult] = []
+    if workers == 1:
+        for i, job in enumerate(jobs):
+            out.append(_replica_job(job))
+            if progress is not None:
+                progress(i + 1, len(jobs), out[-1])
+        return out
+    # "spawn" avoids forking a process that holds threads (numba, BLAS)
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn" if sys.platform != "linux" else "forkserver")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        for i, res in enumerate(pool.map(_replica_job, jobs)):
+            out.append(res)
+            if progress is not None:
+                progress(i + 1, len(jobs), res)
+    return out
