@@ -202,7 +202,7 @@ def _phi_hessian(vx, vy):
 
 
 @njit(cache=True)
-def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, strength):
+def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, strength, project):
     n = pos.shape[0]
     ks, js = _node_segment_pairs(pos, width)
     size = 36 * (n - 2) + 16 * (n - 1) + 2 * n + 36 * ks.shape[0]
@@ -323,6 +323,14 @@ def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, streng
                     block6[off + u, off + v] += val
                     block6[u, off + v] -= val
                     block6[off + u, v] -= val
+        if project:
+            # keep the positive part only: the negative curvature of a contact is a geometric
+            # effect of its force, and left in it forces a large global shift that stalls
+            # Newton on the wire's soft modes (docs/model.md)
+            wv, vv = np.linalg.eigh(block6)
+            for a in range(6):
+                wv[a] = max(wv[a], 0.0)
+            block6 = (vv * wv) @ vv.T
         nodes3[0], nodes3[1], nodes3[2] = k, j, j + 1
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     return rows[:m], cols[:m], vals[:m]
@@ -552,12 +560,12 @@ class WireEnergy:
         self._eg(x)
         return EnergyTerms(*(float(v) for v in self._terms))
 
-    def hessian(self, x, *, dense: bool | None = None):
+    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
         rows, cols, vals = _hessian_triplets(
             x, w.k_b, self._s, self._tp, w.k_s, w.rest_length, self.lam, self.weights,
-            w.hard_core, w.hard_core_energy,
+            w.hard_core, w.hard_core_energy, project_contacts,
         )  # fmt: skip
         ndof = x.size
         if dense is None:
@@ -607,7 +615,8 @@ def hessian(wire: Wire, positions, lam: float, *, dense: bool | None = None):
     """Hessian of the total energy over the flattened coordinates ``2 * node + axis``.
 
     Exact for every term (the hard core's includes the geometric stiffness ε b'/d ∇²D of each
-    contact; it is C1 only, so its Hessian jumps where a pair enters the hard core). Dense ``(2n, 2n)`` ndarray up to ``DENSE_LIMIT`` degrees of freedom, else sparse CSC.
+    contact; it is C1 only, so its Hessian jumps where a pair enters the hard core). Dense
+    ``(2n, 2n)`` ndarray up to ``DENSE_LIMIT`` degrees of freedom, else sparse CSC.
 
     >>> w = Wire(k_b=5, k_s=5e5, n_segments=4)
     >>> hessian(w, np.c_[np.linspace(-0.5, 0.5, 5), np.zeros(5)], lam=1.0).shape

@@ -286,9 +286,11 @@ def _intersect_exact(pos: np.ndarray, i: int, j: int) -> bool:
         if _orient_exact(p1, p2, q2) != 0:
             return False
         u, v = p2 - p1, q2 - q1
-        return Fraction(float(u[0])) * Fraction(float(v[0])) + Fraction(
-            float(u[1])
-        ) * Fraction(float(v[1])) < 0
+        return (
+            Fraction(float(u[0])) * Fraction(float(v[0]))
+            + Fraction(float(u[1])) * Fraction(float(v[1]))
+            < 0
+        )
     o = (
         _orient_exact(p1, p2, q1),
         _orient_exact(p1, p2, q2),
@@ -564,10 +566,18 @@ def _max_safe_fraction(pos, step):
     hix = np.empty(ns)
     hiy = np.empty(ns)
     for i in range(ns):
-        lox[i] = min(pos[i, 0], pos[i + 1, 0], pos[i, 0] + step[i, 0], pos[i + 1, 0] + step[i + 1, 0])
-        hix[i] = max(pos[i, 0], pos[i + 1, 0], pos[i, 0] + step[i, 0], pos[i + 1, 0] + step[i + 1, 0])
-        loy[i] = min(pos[i, 1], pos[i + 1, 1], pos[i, 1] + step[i, 1], pos[i + 1, 1] + step[i + 1, 1])
-        hiy[i] = max(pos[i, 1], pos[i + 1, 1], pos[i, 1] + step[i, 1], pos[i + 1, 1] + step[i + 1, 1])
+        lox[i] = min(
+            pos[i, 0], pos[i + 1, 0], pos[i, 0] + step[i, 0], pos[i + 1, 0] + step[i + 1, 0]
+        )
+        hix[i] = max(
+            pos[i, 0], pos[i + 1, 0], pos[i, 0] + step[i, 0], pos[i + 1, 0] + step[i + 1, 0]
+        )
+        loy[i] = min(
+            pos[i, 1], pos[i + 1, 1], pos[i, 1] + step[i, 1], pos[i + 1, 1] + step[i + 1, 1]
+        )
+        hiy[i] = max(
+            pos[i, 1], pos[i + 1, 1], pos[i, 1] + step[i, 1], pos[i + 1, 1] + step[i + 1, 1]
+        )
     ox = lox.min()
     oy = loy.min()
     h = _cell_size(lox, loy, hix, hiy)

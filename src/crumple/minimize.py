@@ -26,9 +26,13 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.linalg.lapack import dpotrf as _potrf
+from scipy.linalg.lapack import dpotrs as _potrs
 from scipy.optimize import minimize as _scipy_minimize
 
-__all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions"]
+__all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
+
+_EPS = float(np.finfo(float).eps)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -99,14 +103,13 @@ def _factor(h, shift):
         if not (np.all(lu.perm_r == lu.perm_c) and np.all(lu.U.diagonal() > 0)):
             return None
         return lu.solve
-    a = h + shift * np.eye(h.shape[0])
-    try:
-        c = sla.cho_factor(a, check_finite=False)
-    except sla.LinAlgError:
+    a = np.array(h, dtype=np.float64, order="F")  # LAPACK factorises in place
+    if shift:
+        a.flat[:: a.shape[0] + 1] += shift
+    c, info = _potrf(a, lower=False, overwrite_a=True, clean=False)
+    if info != 0 or not np.all(np.isfinite(np.diagonal(c))):
         return None
-    if not np.all(np.isfinite(c[0])):
-        return None
-    return lambda b: sla.cho_solve(c, b, check_finite=False)
+    return lambda b: _potrs(c, b, lower=False)[0]
 
 
 def _validate_common(x0, ftol, maxiter):
@@ -127,6 +130,7 @@ def newton(
     x0,
     *,
     hess: Callable[[np.ndarray], object],
+    hess_fallback: Callable[[np.ndarray], object] | None = None,
     ftol: float = 1e-6,
     maxiter: int = 500,
     max_step: float | None = None,
@@ -145,8 +149,11 @@ def newton(
     value) until the matrix is positive definite, so the step is always a descent direction.
     The step is scaled so that no row moves further than ``max_step``, then cut to 0.8 of
     ``step_limit(x, p)`` when that is below 1, then halved until the Armijo condition holds
-    and ``feasible`` accepts the point. A step whose energy change is lost in round-off is
-    accepted only if it lowers the largest force without raising the energy.
+    and ``feasible`` accepts the point. Near convergence the decrease of the energy falls below
+    its floating-point resolution ``16 ε_mach |E|``; a step is then accepted when its energy
+    change lies within that resolution and it strictly lowers the largest force (the
+    approximate Wolfe condition of Hager & Zhang, 2005). So an accepted step never raises the
+    energy by more than ``resolution(E)``.
 
     A point where the forces vanish is accepted as a minimum only if ``H + τ s I`` is positive
     definite (τ = ``curvature_tol``): at a saddle (the straight wire above its buckling load,
@@ -161,6 +168,10 @@ def newton(
         Start; must be admissible (``feasible(x0)``).
     hess : callable
         ``hess(x)`` -> Hessian over ``x.ravel()``: dense ndarray or SciPy sparse matrix.
+    hess_fallback : callable, optional
+        A positive semi-definite-leaning approximation used (with the shift) whenever the
+        exact Hessian is not positive definite; the exact one is always tried first, so
+        convergence near a stable minimum stays quadratic.
     ftol : float
         Convergence tolerance on the largest row force ``[energy/length]``.
     maxiter : int
@@ -232,9 +243,18 @@ def newton(
         it += 1
         h = hess(x)
         nhev += 1
-        scale = _diag_scale(h)
-        mu = mu / 10.0 if mu > 1e-14 else 0.0
-        solve = _factor(h, mu * scale)
+        # the median, not the largest, diagonal entry sets the shift's scale: a few very stiff
+        # rows (contacts) must not make the shift swamp the soft modes
+        scale = _diag_scale(h, np.median)
+        solve = _factor(h, 0.0)
+        if solve is not None:
+            mu = 0.0
+        else:
+            if hess_fallback is not None:
+                h = hess_fallback(x)
+                nhev += 1
+            mu = mu / 10.0 if mu > 1e-14 else 0.0
+            solve = _factor(h, mu * scale)
         while solve is None:
             mu = max(10.0 * mu, 1e-12)
             if mu > 1e12:
@@ -264,7 +284,9 @@ def newton(
             nfev += 1
             if math.isfinite(et):
                 sufficient = et <= e + armijo * alpha * slope
-                roundoff = et <= e and max_force(gt) < fmax
+                # below the energy's floating-point resolution only the force can tell a
+                # better point (Hager & Zhang's approximate Wolfe condition)
+                roundoff = et <= e + resolution(e) and max_force(gt) < fmax
                 if (sufficient or roundoff) and (feasible is None or feasible(xt)):
                     accepted = True
                     break
@@ -293,9 +315,9 @@ def newton(
     )
 
 
-def _diag_scale(h) -> float:
-    diag = h.diagonal()
-    scale = float(np.max(np.abs(diag))) if diag.size else 1.0
+def _diag_scale(h, how=np.max) -> float:
+    diag = np.abs(h.diagonal())
+    scale = float(how(diag)) if diag.size else 1.0
     return scale if scale > 0 else 1.0
 
 
@@ -328,6 +350,15 @@ def _escape(fun, x, e, g, h, max_step, feasible):
             return xt, float(et), gt, nfev
         d = 0.5 * d
     return None, e, g, nfev
+
+
+def resolution(energy: float) -> float:
+    """Floating-point resolution of an energy value: 16 ε_mach |E| (and at least 1e-300).
+
+    >>> bool(resolution(1.0) == 16 * np.finfo(float).eps)
+    True
+    """
+    return max(16.0 * _EPS * abs(energy), 1e-300)
 
 
 def random_directions(n: int, rng: np.random.Generator) -> np.ndarray:

@@ -111,7 +111,7 @@ class Wire:
     length: float = 1.0
     confinement: Confinement = "per-length"
     hard_core: float = 1e-5
-    hard_core_energy: float = 1.0
+    hard_core_energy: float = 1e-3
     plasticity: Plasticity | None = None
     trap_center: tuple[float, float] = field(default=(0.0, 0.0))
 

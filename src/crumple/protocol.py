@@ -296,6 +296,7 @@ def minimize_wire(
             energy,
             x0,
             hess=energy.hessian,
+            hess_fallback=lambda x: energy.hessian(x, project_contacts=True),
             ftol=ftol,
             maxiter=maxiter,
             max_step=max_step * wire.rest_length,
