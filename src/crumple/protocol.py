@@ -15,6 +15,7 @@ detection so that it can never make the wire cross itself.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -128,7 +129,7 @@ class Ramp:
             raise ValueError("lambdas must not be empty")
         if not all(math.isfinite(v) and v >= 0 for v in lams):
             raise ValueError(f"lambdas must be finite and >= 0, got {self.lambdas!r}")
-        if any(b <= a for a, b in zip(lams, lams[1:], strict=False)):
+        if any(b <= a for a, b in itertools.pairwise(lams)):
             raise ValueError(f"lambdas must be strictly increasing, got {self.lambdas!r}")
         object.__setattr__(self, "lambdas", lams)
         for name in ("initial_noise", "stage_noise"):
