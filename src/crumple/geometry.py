@@ -56,41 +56,40 @@ def _build_hash(lox, loy, hix, hiy, origin_x, origin_y, h):
 
     Returns ``(start, item, cx, cy, mask)``: the entries of bucket ``b`` are
     ``item[start[b]:start[b + 1]]``, with their cell coordinates ``cx``, ``cy`` (a bucket may
-    hold several cells; callers compare coordinates).
+    hold several cells; callers compare coordinates). Boxes lie at or above the origin, so
+    truncation is the floor.
     """
     n = lox.shape[0]
+    inv = 1.0 / h
+    x0 = np.empty(n, dtype=np.int64)
+    x1 = np.empty(n, dtype=np.int64)
+    y0 = np.empty(n, dtype=np.int64)
+    y1 = np.empty(n, dtype=np.int64)
     total = 0
     for i in range(n):
-        nx = int(np.floor((hix[i] - origin_x) / h)) - int(np.floor((lox[i] - origin_x) / h)) + 1
-        ny = int(np.floor((hiy[i] - origin_y) / h)) - int(np.floor((loy[i] - origin_y) / h)) + 1
-        total += nx * ny
+        x0[i] = int((lox[i] - origin_x) * inv)
+        x1[i] = int((hix[i] - origin_x) * inv)
+        y0[i] = int((loy[i] - origin_y) * inv)
+        y1[i] = int((hiy[i] - origin_y) * inv)
+        total += (x1[i] - x0[i] + 1) * (y1[i] - y0[i] + 1)
     size = 1
-    while size < 2 * total:
+    while size < total:  # load factor <= 1; int32 tables stay in cache (measured faster)
         size *= 2
     mask = size - 1
-    counts = np.zeros(size + 1, dtype=np.int64)
+    start = np.zeros(size + 1, dtype=np.int32)
     for i in range(n):
-        x0 = int(np.floor((lox[i] - origin_x) / h))
-        x1 = int(np.floor((hix[i] - origin_x) / h))
-        y0 = int(np.floor((loy[i] - origin_y) / h))
-        y1 = int(np.floor((hiy[i] - origin_y) / h))
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                counts[_cell_hash(ix, iy, mask) + 1] += 1
+        for ix in range(x0[i], x1[i] + 1):
+            for iy in range(y0[i], y1[i] + 1):
+                start[_cell_hash(ix, iy, mask) + 1] += 1
     for b in range(size):
-        counts[b + 1] += counts[b]
-    start = counts.copy()
-    fill = counts[:-1].copy()
-    item = np.empty(total, dtype=np.int64)
-    cx = np.empty(total, dtype=np.int64)
-    cy = np.empty(total, dtype=np.int64)
+        start[b + 1] += start[b]
+    fill = start[:-1].copy()
+    item = np.empty(total, dtype=np.int32)
+    cx = np.empty(total, dtype=np.int32)
+    cy = np.empty(total, dtype=np.int32)
     for i in range(n):
-        x0 = int(np.floor((lox[i] - origin_x) / h))
-        x1 = int(np.floor((hix[i] - origin_x) / h))
-        y0 = int(np.floor((loy[i] - origin_y) / h))
-        y1 = int(np.floor((hiy[i] - origin_y) / h))
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
+        for ix in range(x0[i], x1[i] + 1):
+            for iy in range(y0[i], y1[i] + 1):
                 b = _cell_hash(ix, iy, mask)
                 k = fill[b]
                 item[k] = i
@@ -142,10 +141,10 @@ def _box_pairs(lox, loy, hix, hiy, min_gap):
     h = _cell_size(lox, loy, hix, hiy)
     start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
     for i in range(n):
-        x0 = int(np.floor((lox[i] - ox) / h))
-        x1 = int(np.floor((hix[i] - ox) / h))
-        y0 = int(np.floor((loy[i] - oy) / h))
-        y1 = int(np.floor((hiy[i] - oy) / h))
+        x0 = int((lox[i] - ox) / h)
+        x1 = int((hix[i] - ox) / h)
+        y0 = int((loy[i] - oy) / h)
+        y1 = int((hiy[i] - oy) / h)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 b = _cell_hash(ix, iy, mask)
@@ -155,9 +154,9 @@ def _box_pairs(lox, loy, hix, hiy, min_gap):
                         continue
                     if lox[j] > hix[i] or lox[i] > hix[j] or loy[j] > hiy[i] or loy[i] > hiy[j]:
                         continue
-                    if int(np.floor((max(lox[i], lox[j]) - ox) / h)) != ix:
+                    if int((max(lox[i], lox[j]) - ox) / h) != ix:
                         continue
-                    if int(np.floor((max(loy[i], loy[j]) - oy) / h)) != iy:
+                    if int((max(loy[i], loy[j]) - oy) / h) != iy:
                         continue
                     if m == out.shape[0]:
                         bigger = np.empty((2 * m, 2), dtype=np.int64)
@@ -588,10 +587,10 @@ def _max_safe_fraction(pos, step):
         phx = max(pos[k, 0], pos[k, 0] + step[k, 0])
         ply = min(pos[k, 1], pos[k, 1] + step[k, 1])
         phy = max(pos[k, 1], pos[k, 1] + step[k, 1])
-        x0 = int(np.floor((plx - ox) / h))
-        x1 = int(np.floor((phx - ox) / h))
-        y0 = int(np.floor((ply - oy) / h))
-        y1 = int(np.floor((phy - oy) / h))
+        x0 = int((plx - ox) / h)
+        x1 = int((phx - ox) / h)
+        y0 = int((ply - oy) / h)
+        y1 = int((phy - oy) / h)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 bkt = _cell_hash(ix, iy, mask)
@@ -652,7 +651,8 @@ def _node_segment_pairs(pos, cutoff):
     Node k belongs to segments k - 1 and k; the pair is kept when segment j is non-adjacent
     (``|a - j| >= 2``) to at least one segment a that holds k. Each segment is inserted in every
     cell its box (padded by the cutoff) overlaps, so a node queries its own cell only and finds
-    each pair once.
+    each pair once. The boxes are copied in table order so that a query reads memory
+    sequentially.
     """
     n = pos.shape[0]
     ns = n - 1
@@ -660,7 +660,16 @@ def _node_segment_pairs(pos, cutoff):
     ox = lox.min()
     oy = loy.min()
     h = _cell_size(lox, loy, hix, hiy)
+    inv = 1.0 / h
     start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
+    m_tot = item.shape[0]
+    ebox = np.empty((m_tot, 4))
+    for e in range(m_tot):
+        j = item[e]
+        ebox[e, 0] = lox[j]
+        ebox[e, 1] = hix[j]
+        ebox[e, 2] = loy[j]
+        ebox[e, 3] = hiy[j]
     out_k = np.empty(max(16, n), dtype=np.int64)
     out_j = np.empty(max(16, n), dtype=np.int64)
     m = 0
@@ -668,21 +677,16 @@ def _node_segment_pairs(pos, cutoff):
         px, py = pos[k, 0], pos[k, 1]
         if px < ox or py < oy:
             continue
-        ix = int(np.floor((px - ox) / h))
-        iy = int(np.floor((py - oy) / h))
+        ix = int((px - ox) * inv)
+        iy = int((py - oy) * inv)
         bkt = _cell_hash(ix, iy, mask)
         for e in range(start[bkt], start[bkt + 1]):
-            j = item[e]
+            if px < ebox[e, 0] or px > ebox[e, 1] or py < ebox[e, 2] or py > ebox[e, 3]:
+                continue
             if cx[e] != ix or cy[e] != iy:
                 continue
-            if px < lox[j] or px > hix[j] or py < loy[j] or py > hiy[j]:
-                continue
-            ok = False
-            if k >= 1 and abs(k - 1 - j) >= 2:
-                ok = True
-            if k <= ns - 1 and abs(k - j) >= 2:
-                ok = True
-            if not ok:
+            j = item[e]
+            if not ((k >= 1 and abs(k - 1 - j) >= 2) or (k <= ns - 1 and abs(k - j) >= 2)):
                 continue
             d = _point_segment(px, py, pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1])[0]
             if d >= cutoff:
