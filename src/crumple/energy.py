@@ -79,53 +79,50 @@ def _bend_law(theta, k_b, s, theta_p):
 
 
 @njit(cache=True)
-def _bending_eg(pos, k_b, s, theta_p, grad):
-    e = 0.0
-    for i in range(1, pos.shape[0] - 1):
-        ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
+def _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, grad, terms):
+    """Bending, stretching and confinement in one pass; energies by term into ``terms[:3]``.
+
+    Each segment vector is computed once and reused by the two joints that share it.
+    """
+    n = pos.shape[0]
+    eb = 0.0
+    es = 0.0
+    ec = 0.0
+    ax = ay = la2 = 0.0
+    for i in range(n - 1):
         bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
-        la2 = ax * ax + ay * ay
         lb2 = bx * bx + by * by
-        theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-        f, df, _ = _bend_law(theta, k_b, s, theta_p)
-        e += f
-        gax, gay = ay / la2, -ax / la2  # dθ/da
-        gbx, gby = -by / lb2, bx / lb2  # dθ/db
-        grad[i - 1, 0] -= df * gax
-        grad[i - 1, 1] -= df * gay
-        grad[i, 0] += df * (gax - gbx)
-        grad[i, 1] += df * (gay - gby)
-        grad[i + 1, 0] += df * gbx
-        grad[i + 1, 1] += df * gby
-    return e
-
-
-@njit(cache=True)
-def _stretching_eg(pos, k_s, l0, grad):
-    e = 0.0
-    for i in range(pos.shape[0] - 1):
-        ex, ey = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
-        length = math.sqrt(ex * ex + ey * ey)
+        length = math.sqrt(lb2)
         dl = length - l0
-        e += 0.5 * k_s * dl * dl
+        es += 0.5 * k_s * dl * dl
         c = k_s * dl / length
-        grad[i, 0] -= c * ex
-        grad[i, 1] -= c * ey
-        grad[i + 1, 0] += c * ex
-        grad[i + 1, 1] += c * ey
-    return e
-
-
-@njit(cache=True)
-def _confinement_eg(pos, lam, weights, cx, cy, grad):
-    e = 0.0
-    for i in range(pos.shape[0]):
-        rx, ry = pos[i, 0] - cx, pos[i, 1] - cy
-        w = lam * weights[i]
-        e += w * (rx * rx + ry * ry)
-        grad[i, 0] += 2.0 * w * rx
-        grad[i, 1] += 2.0 * w * ry
-    return e
+        grad[i, 0] -= c * bx
+        grad[i, 1] -= c * by
+        grad[i + 1, 0] += c * bx
+        grad[i + 1, 1] += c * by
+        if i >= 1 and k_b != 0.0:  # joint i between segment a = i - 1 and b = i
+            theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+            f, df, _ = _bend_law(theta, k_b, s, theta_p)
+            eb += f
+            gax, gay = ay / la2, -ax / la2  # dθ/da
+            gbx, gby = -by / lb2, bx / lb2  # dθ/db
+            grad[i - 1, 0] -= df * gax
+            grad[i - 1, 1] -= df * gay
+            grad[i, 0] += df * (gax - gbx)
+            grad[i, 1] += df * (gay - gby)
+            grad[i + 1, 0] += df * gbx
+            grad[i + 1, 1] += df * gby
+        ax, ay, la2 = bx, by, lb2
+    if lam != 0.0:
+        for i in range(n):
+            rx, ry = pos[i, 0] - cx, pos[i, 1] - cy
+            w = lam * weights[i]
+            ec += w * (rx * rx + ry * ry)
+            grad[i, 0] += 2.0 * w * rx
+            grad[i, 1] += 2.0 * w * ry
+    terms[0] = eb
+    terms[1] = es
+    terms[2] = ec
 
 
 @njit(cache=True)
@@ -137,14 +134,16 @@ def _barrier(u):
 
 
 @njit(cache=True)
-def _hard_core_eg(pos, width, strength, grad):
-    ks, js = _node_segment_pairs(pos, width)
+def _hard_core_eg(pos, ks, js, width, strength, grad):
+    """Barrier over candidate (node, segment) pairs; pairs at D >= width contribute nothing."""
     e = 0.0
     for m in range(ks.shape[0]):
         k, j = ks[m], js[m]
         dist, t, vx, vy = _point_segment(
             pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
         )
+        if dist >= width:
+            continue
         if dist <= 0.0:
             return math.inf
         b, db, _ = _barrier(dist / width)
@@ -160,12 +159,19 @@ def _hard_core_eg(pos, width, strength, grad):
 
 
 @njit(cache=True)
-def _total_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, width, strength, terms):
+def _max_displacement(x, ref):
+    m = 0.0
+    for i in range(x.shape[0]):
+        dx, dy = x[i, 0] - ref[i, 0], x[i, 1] - ref[i, 1]
+        m = max(m, dx * dx + dy * dy)
+    return math.sqrt(m)
+
+
+@njit(cache=True)
+def _total_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, ks, js, width, strength, terms):
     grad = np.zeros_like(pos)
-    terms[0] = _bending_eg(pos, k_b, s, theta_p, grad)
-    terms[1] = _stretching_eg(pos, k_s, l0, grad)
-    terms[2] = _confinement_eg(pos, lam, weights, cx, cy, grad)
-    terms[3] = _hard_core_eg(pos, width, strength, grad)
+    _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, grad, terms)
+    terms[3] = _hard_core_eg(pos, ks, js, width, strength, grad)
     return terms[0] + terms[1] + terms[2] + terms[3], grad
 
 
@@ -202,9 +208,9 @@ def _phi_hessian(vx, vy):
 
 
 @njit(cache=True)
-def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, strength, project):
+def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, ks, js, width, strength,
+                      project):  # fmt: skip
     n = pos.shape[0]
-    ks, js = _node_segment_pairs(pos, width)
     size = 36 * (n - 2) + 16 * (n - 1) + 2 * n + 36 * ks.shape[0]
     rows = np.empty(size, dtype=np.int64)
     cols = np.empty(size, dtype=np.int64)
@@ -286,7 +292,7 @@ def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, streng
         dist, t, vx, vy = _point_segment(
             pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
         )
-        if dist <= 0.0:
+        if dist <= 0.0 or dist >= width:
             continue
         _, d1b, d2b = _barrier(dist / width)
         c2 = strength * d2b / (width * width)
@@ -341,6 +347,16 @@ def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, width, streng
 # --------------------------------------------------------------------------------------------
 
 
+def _one_term(pos, index, *, k_b=0.0, s=1.0, theta_p=math.inf, k_s=0.0, l0=1.0, lam=0.0,
+              weights=None, cx=0.0, cy=0.0):  # fmt: skip
+    """One elastic term through the fused kernel, the other coefficients set to zero."""
+    grad = np.zeros_like(pos)
+    terms = np.zeros(4)
+    w = np.zeros(pos.shape[0]) if weights is None else weights
+    _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, w, cx, cy, grad, terms)
+    return float(terms[index]), grad
+
+
 def _plastic_args(plasticity: Plasticity | None) -> tuple[float, float]:
     if plasticity is None:
         return 1.0, math.inf
@@ -377,8 +393,7 @@ def bending_energy(positions, k_b: float, plasticity: Plasticity | None = None):
     """
     pos = _as_positions(positions)
     s, tp = _plastic_args(plasticity)
-    grad = np.zeros_like(pos)
-    return float(_bending_eg(pos, float(k_b), s, tp, grad)), grad
+    return _one_term(pos, 0, k_b=float(k_b), s=s, theta_p=tp)
 
 
 def stretching_energy(positions, k_s: float, rest_length: float):
@@ -400,8 +415,7 @@ def stretching_energy(positions, k_s: float, rest_length: float):
     0.1
     """
     pos = _as_positions(positions)
-    grad = np.zeros_like(pos)
-    return float(_stretching_eg(pos, float(k_s), float(rest_length), grad)), grad
+    return _one_term(pos, 1, k_s=float(k_s), l0=float(rest_length))
 
 
 def confinement_weights(n_nodes: int, kind: str, length: float = 1.0) -> np.ndarray:
@@ -449,9 +463,8 @@ def confinement_energy(positions, lam: float, weights, center=(0.0, 0.0)):
     w = np.ascontiguousarray(weights, dtype=np.float64)
     if w.shape != (pos.shape[0],):
         raise ValueError(f"weights must have shape ({pos.shape[0]},), got {w.shape}")
-    grad = np.zeros_like(pos)
     cx, cy = (float(c) for c in center)
-    return float(_confinement_eg(pos, float(lam), w, cx, cy, grad)), grad
+    return _one_term(pos, 2, lam=float(lam), weights=w, cx=cx, cy=cy)
 
 
 def hard_core_energy(positions, width: float, strength: float = 1.0):
@@ -482,7 +495,8 @@ def hard_core_energy(positions, width: float, strength: float = 1.0):
     grad = np.zeros_like(pos)
     if pos.shape[0] < 4:
         return 0.0, grad
-    return float(_hard_core_eg(pos, float(width), float(strength), grad)), grad
+    ks, js = _node_segment_pairs(pos, float(width))
+    return float(_hard_core_eg(pos, ks, js, float(width), float(strength), grad)), grad
 
 
 @dataclass(frozen=True, slots=True)
@@ -529,7 +543,7 @@ class WireEnergy:
     True
     """
 
-    def __init__(self, wire: Wire, lam: float):
+    def __init__(self, wire: Wire, lam: float, *, skin: float | None = None):
         if not isinstance(wire, Wire):
             raise TypeError(f"wire must be a Wire, got {type(wire).__name__}")
         lam = float(lam)
@@ -540,12 +554,29 @@ class WireEnergy:
         self.weights = confinement_weights(wire.n_nodes, wire.confinement, wire.length)
         self._s, self._tp = _plastic_args(wire.plasticity)
         self._terms = np.zeros(4)
+        # Verlet list: candidate pairs within d + skin of a reference configuration stay valid
+        # while no node has moved more than skin / 2 from it (a pair's distance changes by at
+        # most the sum of its nodes' displacements). Candidates come out in (node, segment)
+        # order as from a fresh search, so the energy is the same function of x to the bit.
+        self.skin = 0.1 * wire.rest_length if skin is None else float(skin)
+        self._ref = None
+        self._ks = self._js = None
+        self.rebuilds = 0
+
+    def _pairs(self, x):
+        if self._ref is None or _max_displacement(x, self._ref) > 0.5 * self.skin:
+            self._ks, self._js = _node_segment_pairs(x, self.wire.hard_core + self.skin)
+            self._ref = x.copy()
+            self.rebuilds += 1
+        return self._ks, self._js
 
     def _eg(self, x):
         w = self.wire
+        ks, js = self._pairs(x)
         return _total_eg(
             x, w.k_b, self._s, self._tp, w.k_s, w.rest_length, self.lam, self.weights,
-            w.trap_center[0], w.trap_center[1], w.hard_core, w.hard_core_energy, self._terms,
+            w.trap_center[0], w.trap_center[1], ks, js, w.hard_core, w.hard_core_energy,
+            self._terms,
         )  # fmt: skip
 
     def __call__(self, x):
@@ -563,9 +594,10 @@ class WireEnergy:
     def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
+        ks, js = self._pairs(x)
         rows, cols, vals = _hessian_triplets(
             x, w.k_b, self._s, self._tp, w.k_s, w.rest_length, self.lam, self.weights,
-            w.hard_core, w.hard_core_energy, project_contacts,
+            ks, js, w.hard_core, w.hard_core_energy, project_contacts,
         )  # fmt: skip
         ndof = x.size
         if dense is None:

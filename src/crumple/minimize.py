@@ -432,7 +432,10 @@ def powell(
     opts = {"direc": direc, "maxiter": int(maxiter), "xtol": xtol, "ftol": 1e-14}
     if maxfev is not None:
         opts["maxfev"] = int(maxfev)
-    res = _scipy_minimize(f, x.ravel(), method="Powell", options=opts)
+    # Brent's parabolic step meets inf - inf at an inadmissible point and falls back to a
+    # golden-section step; the NaN it computes on the way is expected, not an error
+    with np.errstate(invalid="ignore", over="ignore"):
+        res = _scipy_minimize(f, x.ravel(), method="Powell", options=opts)
     xf = np.asarray(res.x, dtype=np.float64).reshape(shape)
     ef = energy(xf)
     fmax = max_force(gradient(xf)) if gradient is not None else math.nan
