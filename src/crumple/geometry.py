@@ -45,6 +45,13 @@ _CCW_ERRBOUND = (3.0 + 16.0 * _EPS) * _EPS
 
 
 @njit(cache=True)
+def _cell(v, origin, h):
+    """Cell index of coordinate v (>= origin). Builds and queries must use this one formula:
+    (v - o) * (1/h) and (v - o) / h can round to different cells on a boundary."""
+    return int((v - origin) / h)
+
+
+@njit(cache=True)
 def _cell_hash(ix, iy, mask):
     # Large odd multipliers (Teschner et al. 2003) spread neighbouring cells over the table.
     return ((ix * 73856093) ^ (iy * 19349663)) & mask
@@ -60,17 +67,16 @@ def _build_hash(lox, loy, hix, hiy, origin_x, origin_y, h):
     truncation is the floor.
     """
     n = lox.shape[0]
-    inv = 1.0 / h
     x0 = np.empty(n, dtype=np.int64)
     x1 = np.empty(n, dtype=np.int64)
     y0 = np.empty(n, dtype=np.int64)
     y1 = np.empty(n, dtype=np.int64)
     total = 0
     for i in range(n):
-        x0[i] = int((lox[i] - origin_x) * inv)
-        x1[i] = int((hix[i] - origin_x) * inv)
-        y0[i] = int((loy[i] - origin_y) * inv)
-        y1[i] = int((hiy[i] - origin_y) * inv)
+        x0[i] = _cell(lox[i], origin_x, h)
+        x1[i] = _cell(hix[i], origin_x, h)
+        y0[i] = _cell(loy[i], origin_y, h)
+        y1[i] = _cell(hiy[i], origin_y, h)
         total += (x1[i] - x0[i] + 1) * (y1[i] - y0[i] + 1)
     size = 1
     while size < total:  # load factor <= 1; int32 tables stay in cache (measured faster)
@@ -141,10 +147,10 @@ def _box_pairs(lox, loy, hix, hiy, min_gap):
     h = _cell_size(lox, loy, hix, hiy)
     start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
     for i in range(n):
-        x0 = int((lox[i] - ox) / h)
-        x1 = int((hix[i] - ox) / h)
-        y0 = int((loy[i] - oy) / h)
-        y1 = int((hiy[i] - oy) / h)
+        x0 = _cell(lox[i], ox, h)
+        x1 = _cell(hix[i], ox, h)
+        y0 = _cell(loy[i], oy, h)
+        y1 = _cell(hiy[i], oy, h)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 b = _cell_hash(ix, iy, mask)
@@ -154,9 +160,9 @@ def _box_pairs(lox, loy, hix, hiy, min_gap):
                         continue
                     if lox[j] > hix[i] or lox[i] > hix[j] or loy[j] > hiy[i] or loy[i] > hiy[j]:
                         continue
-                    if int((max(lox[i], lox[j]) - ox) / h) != ix:
+                    if _cell(max(lox[i], lox[j]), ox, h) != ix:
                         continue
-                    if int((max(loy[i], loy[j]) - oy) / h) != iy:
+                    if _cell(max(loy[i], loy[j]), oy, h) != iy:
                         continue
                     if m == out.shape[0]:
                         bigger = np.empty((2 * m, 2), dtype=np.int64)
@@ -176,16 +182,23 @@ def _box_pairs(lox, loy, hix, hiy, min_gap):
 @njit(cache=True)
 def _orient(ax, ay, bx, by, cx, cy):
     """Sign of the cross product (b - a) x (c - a), and whether that sign is certain."""
-    detleft = (ax - cx) * (by - cy)
-    detright = (ay - cy) * (bx - cx)
+    l1, l2 = ax - cx, by - cy
+    r1, r2 = ay - cy, bx - cx
+    detleft = l1 * l2
+    detright = r1 * r2
+    # exactly zero only if a factor is: two distinct floats never differ by exactly 0 (gradual
+    # underflow), but a product of tiny factors can underflow to 0
+    if (l1 == 0.0 or l2 == 0.0) and (r1 == 0.0 or r2 == 0.0):
+        return 0, True
+    detsum = abs(detleft) + abs(detright)
+    if detsum < 1e-280:  # near underflow Shewchuk's bound does not hold: decide exactly
+        return 0, False
     det = detleft - detright
-    bound = _CCW_ERRBOUND * (abs(detleft) + abs(detright))
+    bound = _CCW_ERRBOUND * detsum
     if det > bound:
         return 1, True
     if -det > bound:
         return -1, True
-    if detleft == 0.0 and detright == 0.0:
-        return 0, True
     return 0, False
 
 
@@ -507,6 +520,36 @@ def _cross(ax, ay, bx, by):
 
 
 @njit(cache=True)
+def _first_contact_collinear(e0x, e0y, dex, dey, q0x, q0y, dqx, dqy):
+    """First contact of a point and a segment that stay on one common line.
+
+    Along a unit vector u of that line, the point is at P(t) = q(t)·u and the segment spans
+    [0, E(t)] with E(t) = e(t)·u (both linear in t, relative to the segment's start): contact
+    when P lies between 0 and E, first at t = 0 or where P = 0 or P = E.
+    """
+    ux, uy = e0x, e0y
+    for vx, vy in ((q0x, q0y), (dqx, dqy), (dex, dey)):
+        if vx * vx + vy * vy > ux * ux + uy * uy:
+            ux, uy = vx, vy
+    norm = np.sqrt(ux * ux + uy * uy)
+    if norm == 0.0:
+        return 0.0  # everything at one point
+    ux, uy = ux / norm, uy / norm
+    p0, dp = q0x * ux + q0y * uy, dqx * ux + dqy * uy
+    s0, ds = e0x * ux + e0y * uy, dex * ux + dey * uy
+    best = 2.0
+    cands = np.array([0.0, -p0 / dp if dp != 0.0 else 2.0,
+                      (s0 - p0) / (dp - ds) if dp != ds else 2.0])  # fmt: skip
+    for t in cands:
+        if 0.0 <= t <= 1.0:
+            pt, st = p0 + t * dp, s0 + t * ds
+            tol = 1e-12 * (abs(pt) + abs(st))
+            if min(0.0, st) - tol <= pt <= max(0.0, st) + tol:
+                best = min(best, t)
+    return best
+
+
+@njit(cache=True)
 def _first_contact(p0x, p0y, dpx, dpy, a0x, a0y, dax, day, b0x, b0y, dbx, dby):
     """Earliest t in [0, 1] at which point p(t) lies on segment a(t)b(t), or 2.0 if none.
 
@@ -524,11 +567,8 @@ def _first_contact(p0x, p0y, dpx, dpy, a0x, a0y, dax, day, b0x, b0y, dbx, dby):
     nr = 0
     scale = abs(a) + abs(b) + abs(c)
     if scale == 0.0:
-        # moving along the segment's own line: contact at once if it overlaps at t = 0 or 1
-        roots[0] = 0.0
-        roots[1] = 1.0
-        nr = 2
-    elif abs(a) <= 1e-14 * scale:
+        return _first_contact_collinear(e0x, e0y, dex, dey, q0x, q0y, dqx, dqy)
+    if abs(a) <= 1e-14 * scale:
         if b != 0.0:
             roots[0] = -c / b
             nr = 1
@@ -587,10 +627,10 @@ def _max_safe_fraction(pos, step):
         phx = max(pos[k, 0], pos[k, 0] + step[k, 0])
         ply = min(pos[k, 1], pos[k, 1] + step[k, 1])
         phy = max(pos[k, 1], pos[k, 1] + step[k, 1])
-        x0 = int((plx - ox) / h)
-        x1 = int((phx - ox) / h)
-        y0 = int((ply - oy) / h)
-        y1 = int((phy - oy) / h)
+        x0 = _cell(plx, ox, h)
+        x1 = _cell(phx, ox, h)
+        y0 = _cell(ply, oy, h)
+        y1 = _cell(phy, oy, h)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 bkt = _cell_hash(ix, iy, mask)
@@ -660,7 +700,6 @@ def _node_segment_pairs(pos, cutoff):
     ox = lox.min()
     oy = loy.min()
     h = _cell_size(lox, loy, hix, hiy)
-    inv = 1.0 / h
     start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
     m_tot = item.shape[0]
     ebox = np.empty((m_tot, 4))
@@ -677,8 +716,8 @@ def _node_segment_pairs(pos, cutoff):
         px, py = pos[k, 0], pos[k, 1]
         if px < ox or py < oy:
             continue
-        ix = int((px - ox) * inv)
-        iy = int((py - oy) * inv)
+        ix = _cell(px, ox, h)
+        iy = _cell(py, oy, h)
         bkt = _cell_hash(ix, iy, mask)
         for e in range(start[bkt], start[bkt + 1]):
             if px < ebox[e, 0] or px > ebox[e, 1] or py < ebox[e, 2] or py > ebox[e, 3]:

@@ -237,6 +237,8 @@ def newton(
             x, e, g = step[:3]
             fmax = max_force(g)
             escapes += 1
+            if callback is not None:
+                callback(it, x, e, fmax)
             continue
         if it >= maxiter:
             break
@@ -322,12 +324,35 @@ def _diag_scale(h, how=np.max) -> float:
 
 
 def _lowest_mode(h):
-    """Lowest eigenvalue and its unit eigenvector of a symmetric (dense or sparse) matrix."""
-    if sp.issparse(h):
-        vals, vecs = spla.eigsh(h, k=1, which="SA", tol=1e-8, maxiter=20 * h.shape[0])
+    """A unit vector of (most) negative curvature of a symmetric matrix, and its curvature.
+
+    Dense: LAPACK's lowest eigenpair. Sparse: inverse iteration on h + μ I with μ the smallest
+    power-of-ten multiple of the diagonal scale that makes it positive definite (ARPACK's
+    smallest-algebraic mode does not converge on these stiff matrices); it only has to find
+    a direction of negative curvature, which it does as soon as the Rayleigh quotient is < 0.
+    """
+    if not sp.issparse(h):
+        vals, vecs = sla.eigh(h, subset_by_index=[0, 0])
         return float(vals[0]), vecs[:, 0]
-    vals, vecs = sla.eigh(h, subset_by_index=[0, 0])
-    return float(vals[0]), vecs[:, 0]
+    scale = _diag_scale(h)
+    mu, solve = 1e-12, None
+    while solve is None and mu <= 1e3:
+        solve = _factor(h, mu * scale)
+        mu *= 10.0
+    if solve is None:
+        return 0.0, np.zeros(h.shape[0])
+    v = np.random.default_rng(0).standard_normal(h.shape[0])  # fixed: results reproducible
+    v /= np.linalg.norm(v)
+    rq = float(v @ (h @ v))
+    for _ in range(100):
+        v = solve(v)
+        v /= np.linalg.norm(v)
+        new = float(v @ (h @ v))
+        if new < 0 and abs(new - rq) <= 1e-6 * abs(new):
+            rq = new
+            break
+        rq = new
+    return rq, v
 
 
 def _escape(fun, x, e, g, h, max_step, feasible):

@@ -11,6 +11,8 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
+import numpy as np
+
 __all__ = ["CONFINEMENTS", "Plasticity", "Wire"]
 
 CONFINEMENTS = ("per-length", "per-node")
@@ -25,6 +27,16 @@ def _check_positive(name: str, value) -> float:
     if not math.isfinite(v) or v <= 0:
         raise ValueError(f"{name} must be a positive finite number, got {value!r}")
     return v
+
+
+def _check_n_segments(n) -> int:
+    """An integer >= 3 (Python or NumPy integer, or an integral float such as 100.0)."""
+    bad = ValueError(f"n_segments must be an integer >= 3, got {n!r}")
+    if isinstance(n, bool | np.bool_) or not isinstance(n, int | float | np.integer | np.floating):
+        raise bad
+    if not math.isfinite(n) or n != int(n) or n < 3:
+        raise bad
+    return int(n)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -118,10 +130,7 @@ class Wire:
     def __post_init__(self):
         for name in ("k_b", "k_s", "length", "hard_core", "hard_core_energy"):
             object.__setattr__(self, name, _check_positive(name, getattr(self, name)))
-        n = self.n_segments
-        if isinstance(n, bool) or not isinstance(n, int | float) or n != int(n) or n < 3:
-            raise ValueError(f"n_segments must be an integer >= 3, got {n!r}")
-        object.__setattr__(self, "n_segments", int(n))
+        object.__setattr__(self, "n_segments", _check_n_segments(self.n_segments))
         if self.confinement not in CONFINEMENTS:
             raise ValueError(
                 f"confinement must be one of {', '.join(CONFINEMENTS)}, got {self.confinement!r}"
@@ -183,8 +192,7 @@ class Wire:
         bending = _check_positive("bending", bending)
         stretching = _check_positive("stretching", stretching)
         length = _check_positive("length", kwargs.get("length", 1.0))
-        if isinstance(n_segments, bool) or not isinstance(n_segments, int) or n_segments < 3:
-            raise ValueError(f"n_segments must be an integer >= 3, got {n_segments!r}")
+        n_segments = _check_n_segments(n_segments)
         seg = length / n_segments
         return cls(k_b=bending / seg, k_s=stretching / seg, n_segments=n_segments, **kwargs)
 

@@ -1,0 +1,836 @@
+"""Tests of crumple.energy in three layers (conventions, item 8):
+
+1. closed forms: a regular polygon's bending energy, a uniformly stretched chain, a straight
+   wire and a ring in the trap for both normalisations, the plastic law of Sec. III.C, the
+   hard core of a hairpin;
+2. finite-difference checks of every gradient (and of the Hessians used by Newton) on random
+   seeded configurations, including the plastic branch and the hard core in contact;
+3. invariants as hypothesis properties: rigid motions, scale invariance of bending, zero net
+   force and torque of the internal terms.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crumple.energy import (
+    WireEnergy,
+    bending_energy,
+    confinement_energy,
+    confinement_weights,
+    energy_terms,
+    hard_core_energy,
+    hessian,
+    stretching_energy,
+    total_energy,
+)
+from crumple.geometry import has_crossings, node_segment_pairs, turning_angles
+from crumple.model import Plasticity, Wire
+
+# --------------------------------------------------------------------------------------------
+# Configurations and finite differences
+# --------------------------------------------------------------------------------------------
+
+
+def barrier(u: float) -> float:
+    """The documented hard-core profile b(u) = (1 - u)^2 / u for u < 1, else 0."""
+    return (1 - u) ** 2 / u if u < 1 else 0.0
+
+
+def paper_bending(theta, k_b, s, theta_p):
+    """Sec. III.C exactly as printed for theta > theta_p, elastic below; even in theta."""
+    a = abs(theta)
+    if a <= theta_p:
+        return 0.5 * k_b * theta**2
+    return (
+        k_b * theta_p**2 / 2
+        + s * k_b * (a**2 - theta_p**2) / 2
+        + k_b * theta_p * (1 - s) * (a - theta_p)
+    )
+
+
+def regular_arc(n_sides: int, n_nodes: int, radius: float = 1.0, center=(0.0, 0.0), phase=0.0):
+    """``n_nodes`` consecutive vertices of a regular ``n_sides``-gon, counter-clockwise."""
+    phi = phase + 2 * np.pi * np.arange(n_nodes) / n_sides
+    return np.c_[radius * np.cos(phi), radius * np.sin(phi)] + np.asarray(center)
+
+
+def random_chain(seed: int, n_segments: int, seg=1.0, max_turn=2.5, stretch=0.2):
+    """A random chain: segment lengths seg * [1 - stretch, 1 + stretch], turning angles
+    uniform in (-max_turn, max_turn) (kept away from ±π, where θ jumps)."""
+    rng = np.random.default_rng(seed)
+    lengths = seg * rng.uniform(1 - stretch, 1 + stretch, n_segments)
+    heading = rng.uniform(0, 2 * np.pi) + np.concatenate(
+        [[0.0], np.cumsum(rng.uniform(-max_turn, max_turn, n_segments - 1))]
+    )
+    steps = np.c_[lengths * np.cos(heading), lengths * np.sin(heading)]
+    return np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]) + rng.uniform(-1, 1, 2) * seg
+
+
+def free_chain(seed: int, n_segments: int, seg=1.0, **kwargs):
+    """A random chain (as :func:`random_chain`) that neither crosses itself nor comes within
+    0.1 seg of itself: no hard-core pair for any d below that."""
+    for attempt in range(1000):
+        pos = random_chain(seed + 7919 * attempt, n_segments, seg, **kwargs)
+        if not has_crossings(pos) and node_segment_pairs(pos, 0.1 * seg)[0].size == 0:
+            return pos
+    raise RuntimeError("no free chain found")
+
+
+def staggered_hairpin(m: int, seg: float, gap: float) -> np.ndarray:
+    """Two parallel strands at distance ``gap`` joined by a short fold, the upper strand's
+    nodes half a segment off the lower one's: every node facing the other strand projects on
+    the *middle* (t = 1/2) of a segment. Strand A: (i seg, 0), i = 0..m; strand B:
+    ((m - 1/2 - j) seg, gap), j = 0..m-1. 2m segments; 2m - 1 node-segment pairs at distance
+    ``gap`` when gap < d < seg / 2."""
+    a = np.c_[np.arange(m + 1) * seg, np.zeros(m + 1)]
+    b = np.c_[(m - 0.5 - np.arange(m)) * seg, np.full(m, gap)]
+    return np.vstack([a, b])
+
+
+def end_contact(m: int, seg: float, gap: float) -> np.ndarray:
+    """A wire whose last node sits at distance ``gap`` from its first node, off the end of
+    the first segment (unclamped projection t = -0.6 gap / seg < 0), coming down a vertical
+    last segment: both contact pairs have their closest point strictly at a segment end."""
+    a = np.c_[np.arange(m + 1) * seg, np.zeros(m + 1)]
+    top = np.c_[(m - np.arange(m + 1)) * seg, np.full(m + 1, 2 * seg)]
+    tail = np.array([[-0.6 * gap, 0.8 * gap + seg], [-0.6 * gap, 0.8 * gap]])
+    return np.vstack([a, top, tail])
+
+
+def contact_geometry(pos, width):
+    """(u, t_unclamped) of every hard-core pair: u = D/d, t the projection parameter."""
+    ks, js = node_segment_pairs(pos, width)
+    out = []
+    for k, j in zip(ks.tolist(), js.tolist(), strict=True):
+        a, b, p = pos[j], pos[j + 1], pos[k]
+        e = b - a
+        t = float((p - a) @ e / (e @ e))
+        c = a + min(1.0, max(0.0, t)) * e
+        out.append((float(np.hypot(*(p - c))) / width, t))
+    return out
+
+
+def assert_smooth_contacts(pos, width, margin=0.05):
+    """Every pair strictly inside the core, away from its kinks: u in (0.2, 0.9), closest
+    point strictly interior or strictly at an end (not near t = 0 or 1)."""
+    geo = contact_geometry(pos, width)
+    assert geo, "the configuration must have contacts"
+    for u, t in geo:
+        assert 0.2 < u < 0.9, u
+        assert min(abs(t), abs(t - 1)) > margin, t
+    return geo
+
+
+def fd_gradient(fun, x, h):
+    """Central differences of a scalar function of an (n, 2) array."""
+    g = np.zeros_like(x)
+    for idx in np.ndindex(x.shape):
+        xp, xm = x.copy(), x.copy()
+        xp[idx] += h
+        xm[idx] -= h
+        g[idx] = (fun(xp) - fun(xm)) / (2 * h)
+    return g
+
+
+def fd_hessian(grad, x, h):
+    """Central differences of the gradient, over the flattened coordinates 2 * node + axis."""
+    n = x.size
+    hm = np.zeros((n, n))
+    for i in range(n):
+        xp, xm = x.copy().ravel(), x.copy().ravel()
+        xp[i] += h
+        xm[i] -= h
+        hm[:, i] = (grad(xp.reshape(x.shape)) - grad(xm.reshape(x.shape))).ravel() / (2 * h)
+    return hm
+
+
+def assert_gradient(fun_eg, x, h, rtol=1e-6):
+    e, g = fun_eg(x)
+    assert math.isfinite(e)
+    fd = fd_gradient(lambda y: fun_eg(y)[0], x, h)
+    scale = float(np.max(np.abs(g)))
+    assert scale > 0
+    np.testing.assert_allclose(g, fd, rtol=rtol, atol=rtol * scale)
+
+
+# --------------------------------------------------------------------------------------------
+# Closed forms: bending
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("n_sides", "n_nodes"), [(3, 4), (6, 7), (12, 9), (100, 101), (40, 120)])
+@pytest.mark.parametrize("radius", [0.01, 1.0, 37.0])
+def test_regular_polygon_bending_energy(n_sides, n_nodes, radius):
+    """Every turning angle of a regular n-gon is 2π/n: E = (n_nodes - 2) k_b/2 (2π/n)^2,
+    whichever way round (counter-clockwise θ = +2π/n, clockwise -2π/n) and whatever its size."""
+    k_b = 3.7
+    pos = regular_arc(n_sides, n_nodes, radius, center=(0.3, -2.0), phase=0.4)
+    want = (n_nodes - 2) * k_b / 2 * (2 * np.pi / n_sides) ** 2
+    e, _ = bending_energy(pos, k_b)
+    assert e == pytest.approx(want, rel=1e-12)
+    e_cw, _ = bending_energy(pos[::-1], k_b)
+    assert e_cw == pytest.approx(want, rel=1e-12)
+    np.testing.assert_allclose(turning_angles(pos), 2 * np.pi / n_sides, rtol=1e-10)
+    np.testing.assert_allclose(turning_angles(pos[::-1]), -2 * np.pi / n_sides, rtol=1e-10)
+
+
+def test_bending_gradient_sign_on_a_single_joint():
+    """Sign convention: for a CCW turn θ > 0 the energy decreases when the last node moves
+    clockwise about the joint (towards straight), i.e. dE/dθ = k_b θ > 0."""
+    k_b, theta = 2.0, 0.7
+    pos = np.array([[-1.0, 0.0], [0.0, 0.0], [np.cos(theta), np.sin(theta)]])
+    _, g = bending_energy(pos, k_b)
+    tangent = np.array([-np.sin(theta), np.cos(theta)])  # d x_2 / dθ
+    assert g[2] @ tangent == pytest.approx(k_b * theta, rel=1e-12)
+    assert g[2] @ pos[2] == pytest.approx(0.0, abs=1e-14)  # no radial component
+
+
+def test_straight_wire_has_no_bending():
+    pos = np.c_[np.linspace(0, 1, 11), np.zeros(11)]
+    e, g = bending_energy(pos, 5.0)
+    assert e == 0.0
+    assert np.all(g == 0.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Closed forms: the plastic law (Sec. III.C)
+# --------------------------------------------------------------------------------------------
+
+
+def joint(theta: float) -> np.ndarray:
+    """Three nodes turning by θ at the middle one (unit segments)."""
+    return np.array([[-1.0, 0.0], [0.0, 0.0], [np.cos(theta), np.sin(theta)]])
+
+
+def joint_energy_and_slope(theta, k_b, plasticity):
+    """f(θ) and f'(θ), the latter from the analytic gradient (x_2 moves on the unit circle)."""
+    e, g = bending_energy(joint(theta), k_b, plasticity)
+    return e, float(g[2] @ np.array([-np.sin(theta), np.cos(theta)]))
+
+
+@pytest.mark.parametrize(("s", "theta_p"), [(0.05, 0.1), (0.4, 0.5), (0.8, 1.0), (0.0, 0.3)])
+def test_plastic_branch_is_the_papers_formula(s, theta_p):
+    k_b = 5.0
+    plast = Plasticity(s=s, theta_p=theta_p)
+    for theta in np.linspace(-3.0, 3.0, 61):
+        e, slope = joint_energy_and_slope(theta, k_b, plast)
+        assert e == pytest.approx(paper_bending(theta, k_b, s, theta_p), rel=1e-12, abs=1e-15)
+        a = abs(theta)
+        want = (
+            k_b * theta
+            if a <= theta_p
+            else np.sign(theta) * (s * k_b * a + k_b * theta_p * (1 - s))
+        )
+        assert slope == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+def test_plastic_polygon_closed_form():
+    """A regular 8-gon turns by π/4 > θ_p at every joint."""
+    k_b, s, theta_p = 5.0, 0.2, 0.3
+    pos = regular_arc(8, 9, radius=0.2)
+    want = 7 * (
+        k_b * theta_p**2 / 2
+        + s * k_b * ((np.pi / 4) ** 2 - theta_p**2) / 2
+        + k_b * theta_p * (1 - s) * (np.pi / 4 - theta_p)
+    )
+    e, _ = bending_energy(pos, k_b, Plasticity(s=s, theta_p=theta_p))
+    assert e == pytest.approx(want, rel=1e-12)
+    e_cw, _ = bending_energy(pos[::-1], k_b, Plasticity(s=s, theta_p=theta_p))
+    assert e_cw == pytest.approx(want, rel=1e-12)
+
+
+@pytest.mark.parametrize(("s", "theta_p"), [(0.05, 0.2), (0.4, 0.5), (0.8, 1.2)])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_plastic_law_is_c1_with_a_jump_in_curvature_at_theta_p(s, theta_p, sign):
+    """Value and slope are continuous at θ_p; the second derivative jumps from k_b (inside)
+    to s k_b (beyond)."""
+    k_b = 4.0
+    plast = Plasticity(s=s, theta_p=theta_p)
+    delta = 1e-7
+    e_in, f_in = joint_energy_and_slope(sign * (theta_p - delta), k_b, plast)
+    e_out, f_out = joint_energy_and_slope(sign * (theta_p + delta), k_b, plast)
+    assert e_in == pytest.approx(paper_bending(theta_p - delta, k_b, s, theta_p), rel=1e-9)
+    assert e_out == pytest.approx(paper_bending(theta_p + delta, k_b, s, theta_p), rel=1e-9)
+    # no jump: across 2δ the energy changes by the slope k_b θ_p times 2δ, to O(δ²)
+    assert e_out - e_in == pytest.approx(2 * delta * k_b * theta_p, rel=1e-5)
+    assert f_in == pytest.approx(sign * k_b * theta_p, rel=1e-5)
+    assert f_out == pytest.approx(sign * k_b * theta_p, rel=1e-5)
+    h = 1e-3 * theta_p
+    inside = (
+        joint_energy_and_slope(sign * (theta_p - h), k_b, plast)[1]
+        - joint_energy_and_slope(sign * (theta_p - 2 * h), k_b, plast)[1]
+    ) / h
+    beyond = (
+        joint_energy_and_slope(sign * (theta_p + 2 * h), k_b, plast)[1]
+        - joint_energy_and_slope(sign * (theta_p + h), k_b, plast)[1]
+    ) / h
+    assert sign * inside == pytest.approx(k_b, rel=1e-6)
+    assert sign * beyond == pytest.approx(s * k_b, rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_plasticity_with_s_one_is_elastic(seed):
+    pos = random_chain(seed, 30)
+    e0, g0 = bending_energy(pos, 2.5)
+    e1, g1 = bending_energy(pos, 2.5, Plasticity(s=1.0, theta_p=0.1))
+    assert e1 == pytest.approx(e0, rel=1e-13)
+    np.testing.assert_allclose(g1, g0, rtol=1e-12, atol=1e-12 * np.max(np.abs(g0)))
+
+
+def test_plasticity_softens_only_beyond_theta_p():
+    pos = random_chain(11, 40, max_turn=1.5)
+    theta = turning_angles(pos)
+    plast = Plasticity(s=0.3, theta_p=0.6)
+    e_el, _ = bending_energy(pos, 2.0)
+    e_pl, _ = bending_energy(pos, 2.0, plast)
+    assert np.any(np.abs(theta) > 0.6) and np.any(np.abs(theta) < 0.6)
+    assert e_pl < e_el
+    assert e_pl == pytest.approx(sum(paper_bending(t, 2.0, 0.3, 0.6) for t in theta), rel=1e-12)
+
+
+# --------------------------------------------------------------------------------------------
+# Closed forms: stretching
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("strain", [-0.3, -1e-4, 1e-6, 0.05, 1.0])
+@pytest.mark.parametrize("n", [3, 10, 101])
+def test_uniformly_stretched_chain(strain, n):
+    """N segments of length l0 (1 + ε): E = N k_s/2 (l0 ε)^2; the tension k_s l0 ε pulls on the
+    two ends only (interior forces cancel), along the chain."""
+    k_s, l0 = 5e5, 1.0 / n
+    direction = np.array([np.cos(0.3), np.sin(0.3)])
+    pos = np.outer(np.arange(n + 1) * l0 * (1 + strain), direction) + np.array([0.2, -0.1])
+    e, g = stretching_energy(pos, k_s, l0)
+    assert e == pytest.approx(n * k_s / 2 * (l0 * strain) ** 2, rel=1e-6)
+    tension = k_s * l0 * strain
+    # round-off: segment lengths ~ l0 carry errors ~ ε_mach, i.e. relative ~ 1e-16 / strain
+    np.testing.assert_allclose(g[0], -tension * direction, rtol=1e-6, atol=1e-6 * abs(tension))
+    np.testing.assert_allclose(g[-1], tension * direction, rtol=1e-6, atol=1e-6 * abs(tension))
+    np.testing.assert_allclose(g[1:-1], 0.0, atol=1e-6 * abs(tension))
+
+
+def test_stretching_is_zero_at_rest_length_whatever_the_shape():
+    pos = regular_arc(7, 20, radius=1.0)
+    l0 = 2 * np.sin(np.pi / 7)
+    e, g = stretching_energy(pos, 1e7, l0)
+    assert e == pytest.approx(0.0, abs=1e-18)
+    assert np.max(np.abs(g)) < 1e-7
+
+
+# --------------------------------------------------------------------------------------------
+# Closed forms: confinement, both normalisations
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("n", [3, 4, 10, 100])
+@pytest.mark.parametrize("length", [1.0, 2.5])
+def test_confinement_weights(n, length):
+    w = confinement_weights(n + 1, "per-length", length)
+    np.testing.assert_allclose(w[1:-1], length / n, rtol=1e-15)
+    assert w[0] == pytest.approx(length / (2 * n), rel=1e-15)
+    assert w[-1] == pytest.approx(length / (2 * n), rel=1e-15)
+    assert w.sum() == pytest.approx(length, rel=1e-14)
+    assert np.all(confinement_weights(n + 1, "per-node", length) == 1.0)
+    with pytest.raises(ValueError, match="confinement"):
+        confinement_weights(n + 1, "per-segment")
+
+
+@pytest.mark.parametrize("n", [4, 10, 100, 1000])
+def test_straight_centred_wire_in_the_trap(n):
+    """Nodes at x_i = L (i/N - 1/2): per node Σ x_i^2 = L^2 (N+1)(N+2)/(12 N); per length
+    (trapezoid) Σ w_i x_i^2 = L^3 (N^2 + 2)/(12 N^2) → L^3/12, the continuum ∫ x^2 ds."""
+    lam, length = 7.0, 2.0
+    x = np.linspace(-length / 2, length / 2, n + 1)
+    pos = np.c_[x, np.zeros_like(x)] + [0.3, -0.4]
+    per_node, _ = confinement_energy(pos, lam, confinement_weights(n + 1, "per-node"), (0.3, -0.4))
+    per_len, _ = confinement_energy(
+        pos, lam, confinement_weights(n + 1, "per-length", length), (0.3, -0.4)
+    )
+    assert per_node == pytest.approx(lam * length**2 * (n + 1) * (n + 2) / (12 * n), rel=1e-12)
+    assert per_len == pytest.approx(lam * length**3 * (n**2 + 2) / (12 * n**2), rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["per-node", "per-length"])
+@pytest.mark.parametrize("center", [(0.0, 0.0), (0.7, -1.3)])
+def test_ring_in_the_trap_through_the_wire(kind, center):
+    """All nodes on a circle of radius R about the trap centre: per node λ (N + 1) R^2, per
+    length λ L0 R^2; the force on node i is -2 λ w_i (r_i - c)."""
+    n, radius, lam = 24, 0.15, 300.0
+    wire = Wire(k_b=5, k_s=5e5, n_segments=n, confinement=kind, trap_center=center)
+    phi = (
+        np.linspace(0, 2 * np.pi, n + 1) ** 1.1
+    )  # uneven spacing: the nodes' radius is what counts
+    pos = radius * np.c_[np.cos(phi), np.sin(phi)] + center
+    terms = energy_terms(wire, pos, lam)
+    want = lam * radius**2 * ((n + 1) if kind == "per-node" else 1.0)
+    assert terms.confinement == pytest.approx(want, rel=1e-12)
+    weights = confinement_weights(n + 1, kind)
+    _, g = confinement_energy(pos, lam, weights, center)
+    np.testing.assert_allclose(g, 2 * lam * weights[:, None] * (pos - center), rtol=1e-14)
+
+
+def test_per_node_and_per_length_differ_by_n_inside():
+    n = 50
+    pos = random_chain(3, n, seg=1 / n)
+    e_node, _ = confinement_energy(pos, 1.0, confinement_weights(n + 1, "per-node"))
+    e_len, _ = confinement_energy(pos, 1.0, confinement_weights(n + 1, "per-length"))
+    end_terms = 0.5 * (pos[0] @ pos[0] + pos[-1] @ pos[-1])
+    assert e_len == pytest.approx((e_node - end_terms) / n, rel=1e-12)
+
+
+def test_confinement_validation():
+    with pytest.raises(ValueError, match="weights"):
+        confinement_energy(np.zeros((5, 2)), 1.0, np.ones(4))
+    with pytest.raises(ValueError, match="lambda"):
+        WireEnergy(Wire(k_b=1, k_s=1e4, n_segments=4), lam=-1.0)
+    with pytest.raises(ValueError, match="lambda"):
+        WireEnergy(Wire(k_b=1, k_s=1e4, n_segments=4), lam=math.nan)
+
+
+# --------------------------------------------------------------------------------------------
+# Closed forms: hard core
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("u", [0.05, 0.3, 0.5, 0.9, 0.999])
+def test_hard_core_hairpin_closed_form(u):
+    """Docstring hairpin: four node-segment pairs at distance D = u d, E = 4 ε b(u)."""
+    d, eps = 1e-5, 2.0
+    pos = np.array([[0, 0], [1, 0], [1, u * d], [0, u * d]])
+    e, _ = hard_core_energy(pos, d, eps)
+    assert e == pytest.approx(4 * eps * barrier(u), rel=1e-9)
+
+
+@pytest.mark.parametrize("u", [0.2, 0.5, 0.8])
+@pytest.mark.parametrize("m", [2, 5, 12])
+def test_hard_core_staggered_hairpin_closed_form_and_force(u, m):
+    """2m - 1 pairs at D = u d: E = (2m - 1) ε b(u); lifting strand B by δ changes E at the
+    rate (2m - 1) ε b'(u) / d, b'(u) = 1 - 1/u^2, so strand B is pushed up (repulsion)."""
+    seg, d, eps = 0.01, 3e-3, 1e-3
+    pos = staggered_hairpin(m, seg, u * d)
+    e, g = hard_core_energy(pos, d, eps)
+    assert e == pytest.approx((2 * m - 1) * eps * barrier(u), rel=1e-10)
+    lift = g[m + 1 :, 1].sum()  # dE/dδ for strand B moved up rigidly
+    assert lift == pytest.approx((2 * m - 1) * eps * (1 - 1 / u**2) / d, rel=1e-9)
+    assert lift < 0
+    np.testing.assert_allclose(g.sum(axis=0), 0.0, atol=1e-9 * np.max(np.abs(g)))
+
+
+def test_hard_core_zero_beyond_the_core_and_c1_at_its_edge():
+    d, eps = 1e-5, 1e-3
+    for gap in (d, 1.0001 * d, 3 * d, 0.1):
+        e, g = hard_core_energy(np.array([[0, 0], [1, 0], [1, gap], [0, gap]]), d, eps)
+        assert e == 0.0
+        assert np.all(g == 0.0)
+    # approaching d from inside, energy and force go to 0 continuously (b(1) = b'(1) = 0)
+    forces = [
+        np.max(
+            np.abs(hard_core_energy(np.array([[0, 0], [1, 0], [1, v * d], [0, v * d]]), d, eps)[1])
+        )
+        for v in (0.99, 0.999, 0.9999)
+    ]
+    assert forces[0] > forces[1] > forces[2]
+    # b'(u) = 1 - 1/u^2 ≈ -2 (1 - u): the force vanishes linearly at the edge
+    assert forces[2] == pytest.approx(1e-2 * forces[0], rel=0.05)
+
+
+def test_hard_core_monotone_and_infinite_at_contact():
+    d = 1e-3
+    gaps = np.linspace(0.01, 0.99, 50) * d
+    energies = [hard_core_energy(np.array([[0, 0], [1, 0], [1, h], [0, h]]), d)[0] for h in gaps]
+    assert np.all(np.diff(energies) < 0)
+    touching = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 0]])  # node 4 on segment 0
+    assert hard_core_energy(touching, d)[0] == math.inf
+    wire = Wire(k_b=1, k_s=1e4, n_segments=4, hard_core=0.1)
+    assert WireEnergy(wire, 1.0)(touching)[0] == math.inf
+
+
+def test_hard_core_ignores_adjacent_segments_but_sees_a_sharp_fold():
+    d = 1e-5
+    # adjacent segments share a node (distance 0) and must not repel: a zigzag of segments
+    # 1.5 d long with right-angle turns has no non-adjacent pair within d
+    zigzag = np.cumsum(np.r_[[[0.0, 0.0]], 1.5 * d * np.tile([[1, 0], [0, 1]], (5, 1))], axis=0)
+    e, g = hard_core_energy(zigzag, d)
+    assert e == 0.0 and np.all(g == 0)
+    # a fold of nearly π: node 2 comes within 0.01 d of segment 0 (it also belongs to segment
+    # 2, which is not adjacent to 0), and node 0 within 0.01 d of segment 2
+    fold = np.array([[0, 0], [1, 0], [0, 1e-7], [-1, 1e-7]])
+    ks, js = node_segment_pairs(fold, d)
+    assert set(zip(ks.tolist(), js.tolist(), strict=True)) == {(0, 2), (2, 0)}
+    e, _ = hard_core_energy(fold, d)
+    assert e == pytest.approx(2 * barrier(0.01), rel=1e-9)
+
+
+# --------------------------------------------------------------------------------------------
+# Composition: WireEnergy is the explicit sum of the plain functions
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["per-node", "per-length"])
+@pytest.mark.parametrize("plastic", [None, Plasticity(s=0.2, theta_p=0.3)])
+def test_wire_energy_is_the_sum_of_the_terms(kind, plastic):
+    m = 6
+    seg = 1.0 / (2 * m)
+    wire = Wire(
+        k_b=3, k_s=2e4, n_segments=2 * m, confinement=kind, plasticity=plastic,
+        hard_core=0.3 * seg, hard_core_energy=0.5, trap_center=(0.1, 0.2),
+    )  # fmt: skip
+    pos = staggered_hairpin(m, seg, 0.15 * seg) + np.random.default_rng(0).normal(
+        0, 1e-4 * seg, (2 * m + 1, 2)
+    )
+    lam = 40.0
+    parts = [
+        bending_energy(pos, wire.k_b, plastic),
+        stretching_energy(pos, wire.k_s, wire.rest_length),
+        confinement_energy(pos, lam, confinement_weights(wire.n_nodes, kind), wire.trap_center),
+        hard_core_energy(pos, wire.hard_core, wire.hard_core_energy),
+    ]
+    e, g = WireEnergy(wire, lam)(pos)
+    assert all(p[0] > 0 for p in parts)
+    assert e == pytest.approx(sum(p[0] for p in parts), rel=1e-13)
+    np.testing.assert_allclose(
+        g, sum(p[1] for p in parts), rtol=1e-12, atol=1e-12 * np.max(np.abs(g))
+    )
+    terms = WireEnergy(wire, lam).terms(pos)
+    assert [terms.bending, terms.stretching, terms.confinement, terms.hard_core] == pytest.approx(
+        [p[0] for p in parts], rel=1e-13
+    )
+    assert terms.total == pytest.approx(e, rel=1e-14)
+    assert terms.to_dict()["total"] == terms.total
+    assert terms.gamma == pytest.approx(terms.stretching / terms.bending)
+    assert total_energy(wire, pos, lam)[0] == e
+
+
+def test_wire_energy_rejects_wrong_node_count():
+    wire = Wire(k_b=1, k_s=1e4, n_segments=10)
+    with pytest.raises(ValueError, match="nodes"):
+        total_energy(wire, np.zeros((5, 2)), 1.0)
+    with pytest.raises(ValueError, match="nodes"):
+        WireEnergy(wire, 1.0).terms(np.zeros((5, 2)))
+
+
+# --------------------------------------------------------------------------------------------
+# Finite-difference gradients of every term and of the total
+# --------------------------------------------------------------------------------------------
+
+SEEDS = range(4)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_bending_gradient_elastic(seed):
+    pos = random_chain(seed, 25, seg=0.04)
+    assert_gradient(lambda x: bending_energy(x, 3.3), pos, h=1e-7)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize(("s", "theta_p"), [(0.0, 0.2), (0.3, 0.5), (0.8, 1.5)])
+def test_bending_gradient_plastic(seed, s, theta_p):
+    pos = random_chain(seed, 25, seg=0.04)
+    theta = np.abs(turning_angles(pos))
+    assert np.any(theta > theta_p)  # the plastic branch is exercised
+    assert_gradient(lambda x: bending_energy(x, 3.3, Plasticity(s=s, theta_p=theta_p)), pos, h=1e-7)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_stretching_gradient(seed):
+    pos = random_chain(seed, 25, seg=0.04, stretch=0.3)
+    assert_gradient(lambda x: stretching_energy(x, 5e5, 0.04), pos, h=1e-7)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("kind", ["per-node", "per-length"])
+def test_confinement_gradient(seed, kind):
+    pos = random_chain(seed, 25, seg=0.04)
+    w = confinement_weights(26, kind)
+    assert_gradient(lambda x: confinement_energy(x, 123.0, w, (0.2, -0.1)), pos, h=1e-6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("u", [0.3, 0.6, 0.85])
+def test_hard_core_gradient_in_contact(seed, u):
+    seg, d = 0.01, 3e-3
+    rng = np.random.default_rng(seed)
+    pos = staggered_hairpin(6, seg, u * d) + rng.normal(0, 0.01 * u * d, (13, 2))
+    assert_smooth_contacts(pos, d)
+    assert_gradient(lambda x: hard_core_energy(x, d, 1e-3), pos, h=1e-9)
+    base = end_contact(5, seg, u * d)
+    pos = base + rng.normal(0, 0.01 * u * d, base.shape)
+    assert_smooth_contacts(pos, d)
+    assert_gradient(lambda x: hard_core_energy(x, d, 1e-3), pos, h=1e-9)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("kind", ["per-node", "per-length"])
+@pytest.mark.parametrize("plastic", [None, Plasticity(s=0.1, theta_p=0.4)])
+def test_total_gradient_random_and_in_contact(seed, kind, plastic):
+    m = 7
+    seg = 1.0 / (2 * m)
+    wire = Wire(
+        k_b=4, k_s=1e5, n_segments=2 * m, confinement=kind, plasticity=plastic,
+        hard_core=0.3 * seg, hard_core_energy=0.01, trap_center=(0.05, 0.02),
+    )  # fmt: skip
+    energy = WireEnergy(wire, 500.0)
+    rng = np.random.default_rng(seed)
+    pos = staggered_hairpin(m, seg, 0.15 * seg) + rng.normal(0, 1e-3 * seg, (2 * m + 1, 2))
+    assert_smooth_contacts(pos, wire.hard_core)
+    assert energy.terms(pos).hard_core > 0
+    assert_gradient(energy, pos, h=1e-8)
+    free = free_chain(seed, 2 * m, seg=seg, stretch=0.1)
+    assert_gradient(energy, free, h=1e-8)
+
+
+# --------------------------------------------------------------------------------------------
+# Hessians: finite differences of the gradient, dense against sparse
+# --------------------------------------------------------------------------------------------
+
+
+def assert_hessian(energy: WireEnergy, pos, h, rtol=1e-6):
+    hm = energy.hessian(pos, dense=True)
+    assert hm.shape == (pos.size, pos.size)
+    np.testing.assert_allclose(hm, hm.T, rtol=0, atol=1e-12 * np.max(np.abs(hm)))
+    fd = fd_hessian(lambda x: energy(x)[1], pos, h)
+    np.testing.assert_allclose(hm, fd, rtol=rtol, atol=rtol * np.max(np.abs(hm)))
+    hs = energy.hessian(pos, dense=False)
+    assert sp.issparse(hs)
+    np.testing.assert_allclose(hs.toarray(), hm, rtol=1e-12, atol=1e-13 * np.max(np.abs(hm)))
+    return hm
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("plastic", [None, Plasticity(s=0.2, theta_p=0.4)])
+@pytest.mark.parametrize("kind", ["per-node", "per-length"])
+def test_hessian_elastic_terms(seed, plastic, kind):
+    n = 12
+    wire = Wire(
+        k_b=5, k_s=2e3, n_segments=n, plasticity=plastic, confinement=kind, trap_center=(0.1, 0)
+    )
+    pos = free_chain(seed, n, seg=1 / n, max_turn=2.0, stretch=0.2)
+    if plastic is not None:  # stay off the kink of f'' at θ_p
+        assert np.all(np.abs(np.abs(turning_angles(pos)) - 0.4) > 1e-3)
+    assert not node_segment_pairs(pos, wire.hard_core)[0].size
+    assert_hessian(WireEnergy(wire, 250.0), pos, h=1e-6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("u", [0.3, 0.5, 0.8])
+@pytest.mark.parametrize("shape", ["interior", "end"])
+def test_hessian_hard_core_dominated(seed, u, shape):
+    """Elastic constants negligible: the Hessian is the hard core's, exact formula for
+    interior closest points (with the sliding/rotation coupling) and for ends."""
+    m = 5
+    seg = 0.1
+    if shape == "interior":
+        base = staggered_hairpin(m, seg, u * 0.3 * seg)
+    else:
+        base = end_contact(m, seg, u * 0.3 * seg)
+    n_seg = len(base) - 1
+    wire = Wire(
+        k_b=1e-9,
+        k_s=1e-9,
+        n_segments=n_seg,
+        length=n_seg * seg,
+        hard_core=0.3 * seg,
+        hard_core_energy=1.0,
+    )
+    rng = np.random.default_rng(seed)
+    pos = base + rng.normal(0, 0.02 * u * wire.hard_core, base.shape)
+    geo = assert_smooth_contacts(pos, wire.hard_core)
+    if shape == "end":
+        assert all(t < 0 or t > 1 for _, t in geo)
+    else:
+        assert all(0 < t < 1 for _, t in geo)
+    energy = WireEnergy(wire, 0.0)
+    assert energy.terms(pos).hard_core > 1e3 * (
+        energy.terms(pos).bending + energy.terms(pos).stretching
+    )
+    assert_hessian(energy, pos, h=1e-6 * u * wire.hard_core, rtol=1e-6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_hessian_total_in_contact(seed):
+    m = 7
+    seg = 1.0 / (2 * m)
+    wire = Wire(
+        k_b=4, k_s=1e3, n_segments=2 * m, plasticity=Plasticity(s=0.3, theta_p=0.2),
+        hard_core=0.3 * seg, hard_core_energy=0.05,
+    )  # fmt: skip
+    rng = np.random.default_rng(seed)
+    pos = staggered_hairpin(m, seg, 0.5 * wire.hard_core) + rng.normal(
+        0, 1e-3 * wire.hard_core, (2 * m + 1, 2)
+    )
+    assert_smooth_contacts(pos, wire.hard_core)
+    assert_hessian(WireEnergy(wire, 100.0), pos, h=1e-7 * wire.hard_core, rtol=1e-6)
+
+
+def test_projected_contact_hessian_only_adds_positive_curvature():
+    m = 7
+    seg = 1.0 / (2 * m)
+    wire = Wire(k_b=1, k_s=1e3, n_segments=2 * m, hard_core=0.3 * seg, hard_core_energy=1.0)
+    pos = staggered_hairpin(m, seg, 0.4 * wire.hard_core) + np.random.default_rng(5).normal(
+        0, 1e-3 * wire.hard_core, (2 * m + 1, 2)
+    )
+    energy = WireEnergy(wire, 10.0)
+    exact = energy.hessian(pos, dense=True)
+    proj = energy.hessian(pos, dense=True, project_contacts=True)
+    assert not np.allclose(exact, proj)  # the contacts' negative curvature was removed ...
+    assert np.linalg.eigvalsh(proj - exact).min() > -1e-9 * np.abs(exact).max()  # ... only that
+    free = free_chain(1, 2 * m, seg=seg)
+    np.testing.assert_array_equal(energy.hessian(free, project_contacts=True), energy.hessian(free))
+
+
+def test_hessian_dense_or_sparse_by_size():
+    small = Wire(k_b=1, k_s=1e4, n_segments=20)
+    big = Wire(k_b=1, k_s=1e4, n_segments=1000)
+    x_small = np.c_[np.linspace(-0.5, 0.5, 21), np.zeros(21)]
+    x_big = np.c_[np.linspace(-0.5, 0.5, 1001), np.zeros(1001)]
+    assert isinstance(hessian(small, x_small, 1.0), np.ndarray)
+    assert sp.issparse(hessian(big, x_big, 1.0))
+    assert hessian(big, x_big, 1.0).shape == (2002, 2002)
+
+
+# --------------------------------------------------------------------------------------------
+# Invariants (hypothesis)
+# --------------------------------------------------------------------------------------------
+
+
+def rotation(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+motions = {
+    "seed": st.integers(0, 2**32 - 1),
+    "n": st.integers(3, 60),
+    "angle": st.floats(-np.pi, np.pi),
+    "shift": st.tuples(st.floats(-5, 5), st.floats(-5, 5)),
+}
+
+
+@settings(max_examples=100, deadline=None)
+@given(**motions, plastic=st.booleans())
+def test_rigid_motions_leave_bending_and_stretching_unchanged(seed, n, angle, shift, plastic):
+    pos = random_chain(seed, n, seg=1 / n, max_turn=2.8)
+    rot = rotation(angle)
+    moved = pos @ rot.T + np.asarray(shift)
+    plast = Plasticity(s=0.3, theta_p=0.5) if plastic else None
+    e0, g0 = bending_energy(pos, 4.0, plast)
+    e1, g1 = bending_energy(moved, 4.0, plast)
+    assert e1 == pytest.approx(e0, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(g1, g0 @ rot.T, rtol=1e-6, atol=1e-7 * np.max(np.abs(g0)))
+    e0, g0 = stretching_energy(pos, 1e6, 1 / n)
+    e1, g1 = stretching_energy(moved, 1e6, 1 / n)
+    assert e1 == pytest.approx(e0, rel=1e-8)
+    np.testing.assert_allclose(g1, g0 @ rot.T, rtol=1e-6, atol=1e-7 * np.max(np.abs(g0)))
+
+
+@settings(max_examples=100, deadline=None)
+@given(**motions, kind=st.sampled_from(["per-node", "per-length"]))
+def test_rotation_about_the_trap_centre_leaves_confinement_unchanged(seed, n, angle, shift, kind):
+    center = np.asarray(shift)
+    pos = random_chain(seed, n, seg=1 / n) + center
+    moved = (pos - center) @ rotation(angle).T + center
+    w = confinement_weights(n + 1, kind)
+    e0, g0 = confinement_energy(pos, 77.0, w, tuple(center))
+    e1, g1 = confinement_energy(moved, 77.0, w, tuple(center))
+    assert e1 == pytest.approx(e0, rel=1e-10)
+    np.testing.assert_allclose(
+        g1, g0 @ rotation(angle).T, rtol=1e-8, atol=1e-10 * np.max(np.abs(g0))
+    )
+    # a translation away from the centre does change it: the trap is not translation invariant
+    e2, _ = confinement_energy(pos + np.array([0.5, 0.0]), 77.0, w, tuple(center))
+    assert e2 != pytest.approx(e0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(**motions, u=st.floats(0.2, 0.9))
+def test_rigid_motions_leave_the_hard_core_unchanged(seed, n, angle, shift, u):
+    """The neighbour search uses an axis-aligned grid; the energy must not see the axes."""
+    m = 2 + n % 8
+    seg, d = 0.01, 3e-3
+    pos = staggered_hairpin(m, seg, u * d) + np.random.default_rng(seed).normal(
+        0, 1e-3 * d, (2 * m + 1, 2)
+    )
+    moved = pos @ rotation(angle).T + np.asarray(shift)
+    e0, g0 = hard_core_energy(pos, d, 1e-3)
+    e1, g1 = hard_core_energy(moved, d, 1e-3)
+    assert e0 > 0
+    assert e1 == pytest.approx(e0, rel=1e-6)
+    np.testing.assert_allclose(
+        g1, g0 @ rotation(angle).T, rtol=1e-5, atol=1e-6 * np.max(np.abs(g0))
+    )
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 60), scale=st.floats(1e-4, 1e4))
+def test_bending_is_scale_invariant(seed, n, scale):
+    pos = random_chain(seed, n, max_turn=2.8)
+    e0, g0 = bending_energy(pos, 2.0)
+    e1, g1 = bending_energy(scale * pos, 2.0)
+    assert e1 == pytest.approx(e0, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(g1 * scale, g0, rtol=1e-6, atol=1e-7 * np.max(np.abs(g0)))
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 60), plastic=st.booleans())
+def test_internal_forces_have_no_net_force_or_torque(seed, n, plastic):
+    """Translation and rotation invariance of the internal terms, in differential form:
+    Σ_i ∇_i E = 0 and Σ_i r_i × ∇_i E = 0."""
+    pos = random_chain(seed, n, seg=1 / n, max_turn=2.8) + 3.0
+    plast = Plasticity(s=0.2, theta_p=0.3) if plastic else None
+    for _, g in (bending_energy(pos, 4.0, plast), stretching_energy(pos, 1e5, 1 / n)):
+        scale = np.max(np.abs(g)) * (1 + np.max(np.abs(pos)))
+        assert np.all(np.abs(g.sum(axis=0)) <= 1e-10 * scale)
+        torque = np.sum(pos[:, 0] * g[:, 1] - pos[:, 1] * g[:, 0])
+        assert abs(torque) <= 1e-10 * scale
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), jump=st.sampled_from([0.005, 0.02, 0.3]))
+def test_wire_energy_has_no_memory(seed, jump):
+    """WireEnergy keeps a neighbour list between calls (a Verlet list). Along a random walk of
+    configurations in and out of contact, every evaluation must equal a fresh one: same
+    energy by term and same gradient (the docstring promises "to the bit"), whatever the
+    history."""
+    m = 6
+    seg = 1.0 / (2 * m)
+    wire = Wire(k_b=2, k_s=1e3, n_segments=2 * m, hard_core=0.3 * seg, hard_core_energy=0.1)
+    rng = np.random.default_rng(seed)
+    x = staggered_hairpin(m, seg, 0.8 * wire.hard_core)
+    reused = WireEnergy(wire, 50.0)
+    in_contact = 0
+    for _ in range(40):
+        x = x + rng.normal(0, jump * wire.hard_core, x.shape)
+        x[m + 1 :, 1] = np.clip(x[m + 1 :, 1], 0.3 * wire.hard_core, 1.5 * wire.hard_core)
+        fresh = WireEnergy(wire, 50.0)
+        e1, g1 = reused(x)
+        e2, g2 = fresh(x)
+        assert e1 == e2
+        np.testing.assert_array_equal(g1, g2)
+        assert reused.terms(x) == fresh.terms(x)
+        hc, _ = hard_core_energy(x, wire.hard_core, wire.hard_core_energy)
+        assert fresh.terms(x).hard_core == pytest.approx(hc, rel=1e-14, abs=0)
+        np.testing.assert_array_equal(reused.hessian(x), fresh.hessian(x))
+        in_contact += hc > 0
+    assert in_contact > 0
+
+
+def test_test_configurations_are_what_they_claim():
+    """The helper geometries used above: crossing-free, with the stated contacts."""
+    seg, d = 0.01, 3e-3
+    hp = staggered_hairpin(6, seg, 0.5 * d)
+    geo = contact_geometry(hp, d)
+    assert len(geo) == 11
+    assert all(u == pytest.approx(0.5) and t == pytest.approx(0.5) for u, t in geo)
+    assert not has_crossings(hp)
+    ec = end_contact(5, seg, 0.5 * d)
+    geo = contact_geometry(ec, d)
+    assert len(geo) == 2 and all(u == pytest.approx(0.5) for u, _ in geo)
+    assert not has_crossings(ec)

@@ -1,0 +1,588 @@
+"""Tests of crumple.geometry: exact crossing detection against an exact rational reference,
+continuous collision detection along straight paths, and the hard core's neighbour list
+against brute force.
+
+Every reference here is written independently of the code under test: segment intersection
+by solving the two parametric equations in exact rational arithmetic (the code uses
+orientation signs), distances by a plain O(N^2) loop.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from crumple.geometry import (
+    close_segment_pairs,
+    find_crossings,
+    has_crossings,
+    max_safe_fraction,
+    node_segment_pairs,
+    point_segment_distance,
+    segment_distance,
+    segment_lengths,
+    turning_angles,
+)
+
+# --------------------------------------------------------------------------------------------
+# Exact references
+# --------------------------------------------------------------------------------------------
+
+
+def _frac(p) -> tuple[Fraction, Fraction]:
+    return Fraction(float(p[0])), Fraction(float(p[1]))
+
+
+def _cross(u, v) -> Fraction:
+    return u[0] * v[1] - u[1] * v[0]
+
+
+def _dot(u, v) -> Fraction:
+    return u[0] * v[0] + u[1] * v[1]
+
+
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1])
+
+
+def _point_on_closed_segment(p, a, b) -> bool:
+    ab, ap = _sub(b, a), _sub(p, a)
+    if _cross(ab, ap) != 0:
+        return False
+    return 0 <= _dot(ap, ab) <= _dot(ab, ab)
+
+
+def ref_segments_intersect(p1, p2, q1, q2) -> bool:
+    """Closed segments p1p2 and q1q2 share a point: exact, by solving p1 + s r = q1 + t q."""
+    r, q = _sub(p2, p1), _sub(q2, q1)
+    if r == (0, 0):
+        return _point_on_closed_segment(p1, q1, q2)
+    if q == (0, 0):
+        return _point_on_closed_segment(q1, p1, p2)
+    w = _sub(q1, p1)
+    denom = _cross(r, q)
+    if denom != 0:
+        s = _cross(w, q) / denom
+        t = _cross(w, r) / denom
+        return 0 <= s <= 1 and 0 <= t <= 1
+    if _cross(w, r) != 0:  # parallel, on different lines
+        return False
+    rr = _dot(r, r)  # collinear: do the parameter intervals along r overlap?
+    t0, t1 = _dot(w, r) / rr, _dot(_sub(q2, p1), r) / rr
+    return max(min(t0, t1), 0) <= min(max(t0, t1), 1)
+
+
+def ref_crossings(pos) -> list[tuple[int, int]]:
+    """O(N^2) exact reference of find_crossings' documented semantics: non-adjacent closed
+    segments that share a point; adjacent segments folded back exactly onto each other."""
+    p = [_frac(v) for v in np.asarray(pos, dtype=float)]
+    ns = len(p) - 1
+    out = []
+    for i in range(ns):
+        for j in range(i + 1, ns):
+            if j == i + 1:
+                u, v = _sub(p[i + 1], p[i]), _sub(p[i + 2], p[i + 1])
+                hit = _cross(u, v) == 0 and _dot(u, v) < 0
+            else:
+                hit = ref_segments_intersect(p[i], p[i + 1], p[j], p[j + 1])
+            if hit:
+                out.append((i, j))
+    return out
+
+
+def naive_orientation(a, b, c) -> float:
+    """Plain floating-point orientation: what a non-robust code would compute."""
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+
+def ref_point_segment(p, a, b) -> float:
+    p, a, b = (np.asarray(v, dtype=float) for v in (p, a, b))
+    e = b - a
+    ee = float(e @ e)
+    t = 0.0 if ee == 0 else min(1.0, max(0.0, float((p - a) @ e) / ee))
+    return float(np.hypot(*(p - a - t * e)))
+
+
+def ref_node_segment_pairs(pos, cutoff) -> set[tuple[int, int]]:
+    """Brute force over every (node, segment): kept when the segment is non-adjacent to a
+    segment holding the node (|a - j| >= 2) and the node is closer than ``cutoff``."""
+    pos = np.asarray(pos, dtype=float)
+    ns = len(pos) - 1
+    out = set()
+    for k in range(len(pos)):
+        holders = [a for a in (k - 1, k) if 0 <= a < ns]
+        for j in range(ns):
+            if not any(abs(a - j) >= 2 for a in holders):
+                continue
+            if point_segment_distance(pos[k], pos[j], pos[j + 1]) < cutoff:
+                out.add((k, j))
+    return out
+
+
+def ref_segment_distance(pos, i, j) -> float:
+    p1, p2, q1, q2 = pos[i], pos[i + 1], pos[j], pos[j + 1]
+    if ref_segments_intersect(*(_frac(v) for v in (p1, p2, q1, q2))):
+        return 0.0
+    return min(
+        ref_point_segment(p1, q1, q2),
+        ref_point_segment(p2, q1, q2),
+        ref_point_segment(q1, p1, p2),
+        ref_point_segment(q2, p1, p2),
+    )
+
+
+def random_walk(rng: np.random.Generator, n_segments: int, turn: float = 2.0) -> np.ndarray:
+    """Planar walk with segment lengths in [0.5, 1.5] and turning angles in (-turn, turn)."""
+    steps = rng.uniform(0.5, 1.5, n_segments)
+    angles = np.cumsum(rng.uniform(-turn, turn, n_segments))
+    return np.vstack(
+        [[0.0, 0.0], np.cumsum(np.c_[steps * np.cos(angles), steps * np.sin(angles)], 0)]
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# find_crossings: hand-built cases
+# --------------------------------------------------------------------------------------------
+
+HAND_CASES = {
+    # name: (positions, expected crossings)
+    "straight": ([[0, 0], [1, 0], [2, 0], [3, 0]], []),
+    "X crossing": ([[0, 0], [2, 0], [2, 1], [1, 1], [1, -1]], [(0, 3)]),
+    "T touching (node on interior)": ([[0, 0], [2, 0], [2, 1], [1, 1], [1, 0]], [(0, 3)]),
+    "T just short of touching": ([[0, 0], [2, 0], [2, 1], [1, 1], [1, 1e-300]], []),
+    "endpoint on endpoint": ([[0, 0], [2, 0], [2, 1], [0, 1], [0, 0]], [(0, 3)]),
+    "collinear overlap": ([[0, 0], [2, 0], [2, 1], [1, 1], [1, 0], [1.5, 0]], [(0, 3), (0, 4)]),
+    "collinear overlap only": ([[0, 0], [2, 0], [2, 1], [-1, 1], [-1, 0], [1, 0]], [(0, 4)]),
+    "collinear disjoint": ([[0, 0], [2, 0], [2, 1], [-2, 1], [-2, 0], [-1, 0]], []),
+    "collinear touching at an end": ([[0, 0], [2, 0], [2, 1], [-2, 1], [-2, 0], [0, 0]], [(0, 4)]),
+    "collinear containing": ([[0, 0], [2, 0], [2, 1], [-2, 1], [-2, 0], [3, 0]], [(0, 4), (1, 4)]),
+    "adjacent fold-back": ([[0, 0], [1, 0], [0.5, 0]], [(0, 1)]),
+    "adjacent fold-back beyond the start": ([[0, 0], [1, 0], [-1, 0]], [(0, 1)]),
+    "adjacent straight continuation": ([[0, 0], [1, 0], [1.5, 0]], []),
+    "adjacent fold-back missed by a tiny angle": ([[0, 0], [1, 0], [0.5, 1e-300]], []),
+    "adjacent right angle": ([[0, 0], [1, 0], [1, 1]], []),
+    "parallel, not collinear": ([[0, 0], [2, 0], [2, 1], [0, 1]], []),
+}
+
+
+@pytest.mark.parametrize("name", list(HAND_CASES))
+def test_find_crossings_hand_built(name):
+    pos, expected = HAND_CASES[name]
+    got = [tuple(p) for p in find_crossings(np.array(pos, dtype=float)).tolist()]
+    assert got == expected
+    assert got == ref_crossings(pos)  # the reference agrees with the hand-made answer
+    assert has_crossings(pos) == bool(expected)
+
+
+def test_find_crossings_output_format():
+    pos = np.array([[0, 0], [4, 0], [4, 1], [1, 1], [1, -1], [2, -1], [2, 2], [3, 2], [3, -1]])
+    hits = find_crossings(pos)
+    assert hits.dtype.kind == "i" and hits.shape[1] == 2
+    assert np.all(hits[:, 0] < hits[:, 1])
+    assert [tuple(h) for h in hits.tolist()] == sorted(ref_crossings(pos))
+    assert len(hits) >= 5  # many crossings, reported once each and sorted
+    assert find_crossings(np.zeros((0, 2))).shape == (0, 2)
+
+
+@pytest.mark.parametrize("bad", [np.zeros((4, 3)), np.zeros(4), [[0, 0], [1, np.nan], [2, 0]]])
+def test_find_crossings_rejects_bad_positions(bad):
+    with pytest.raises(ValueError, match="positions"):
+        find_crossings(bad)
+
+
+def test_find_crossings_pairs_on_a_cell_boundary():
+    """Found by the scaled-grid property below: segment 2 folds back exactly onto segment 1
+    and ends on node 1, which is also the end of segment 0. Coordinates such that a box edge
+    lies exactly on a cell boundary of the spatial hash (4e-5 = the cell size)."""
+    pos = np.array([(0, 0), (0, 4), (1, 4), (0, 4)], dtype=float) * 1e-5
+    assert ref_crossings(pos) == [(0, 2), (1, 2)]
+    assert find_crossings(pos).tolist() == [[0, 2], [1, 2]]
+    assert has_crossings(pos)
+
+
+def test_one_ulp_above_below_and_on_a_diagonal():
+    """A node at one ulp from the line y = x decides the answer: above (same side as the wire
+    comes from) no contact, on it touching, one ulp below crossing."""
+    up = math.nextafter(0.5, 1.0)
+    down = math.nextafter(0.5, 0.0)
+
+    def wire(py):
+        return [[0, 0], [1, 1], [1, 2], [0.25, 0.75], [0.5, py]]
+
+    assert find_crossings(wire(up)).tolist() == []
+    assert find_crossings(wire(0.5)).tolist() == [[0, 3]]
+    assert find_crossings(wire(down)).tolist() == [[0, 3]]
+
+
+@pytest.mark.parametrize(
+    "pos",
+    [
+        # node 2 sits one subnormal (5e-324) off the line of segment 0: no fold-back
+        [[0, 0], [1, 0], [0.5, 5e-324]],
+        # segment 0 rises by 5e-324 over a unit length; node 4 at (0.5, 5e-324) is above its
+        # midpoint height (2.5e-324) in exact arithmetic: no contact
+        [[0, 0], [1, 5e-324], [1, 1], [0.5, 1], [0.5, 5e-324]],
+    ],
+)
+def test_exact_when_orientation_products_underflow(pos):
+    """Exactness must survive underflow: both products of the float orientation round to 0
+    here while the exact determinant is not 0 (Shewchuk's bound assumes no underflow)."""
+    assert ref_crossings(pos) == []
+    assert find_crossings(pos).tolist() == []
+    assert not has_crossings(pos)
+
+
+def test_exact_against_rational_reference_near_degenerate():
+    """Nodes within a few ulps of a long skew segment, where plain floating-point orientation
+    gets the sign wrong: find_crossings must agree with exact arithmetic every time."""
+    rng = np.random.default_rng(20240601)
+    disagreements = 0
+    checked = 0
+    outcomes = set()
+    for _ in range(12):
+        a = rng.uniform(-1, 1, 2)
+        b = a + rng.uniform(0.5, 3.0) * np.array(
+            [math.cos(th := rng.uniform(0, 6.3)), math.sin(th)]
+        )
+        s = rng.uniform(0.2, 0.8)
+        base = a + s * (b - a)  # within round-off of the segment
+        normal = np.array([-(b - a)[1], (b - a)[0]])
+        normal /= np.linalg.norm(normal)
+        far = base + 0.3 * normal  # a node clearly on the left of the segment
+        beyond = far + 5.0 * (b - a)
+        for dx, dy in itertools.product(range(-4, 5), repeat=2):
+            p = np.array(
+                [
+                    base[0] + dx * np.spacing(base[0]),
+                    base[1] + dy * np.spacing(base[1]),
+                ]
+            )
+            pos = np.array([a, b, beyond, far, p])
+            got = [tuple(h) for h in find_crossings(pos).tolist()]
+            want = ref_crossings(pos)
+            assert got == want, (a, b, p)
+            assert has_crossings(pos) == bool(want)
+            outcomes.add(bool(want))
+            checked += 1
+            fa, fb, fp = _frac(a), _frac(b), _frac(p)
+            exact = _cross(_sub(fb, fa), _sub(fp, fa))
+            naive = naive_orientation(a, b, p)
+            if np.sign(naive) != (exact > 0) - (exact < 0):
+                disagreements += 1
+    assert outcomes == {True, False}
+    # the data set must actually contain cases a naive test misclassifies, or it tests nothing
+    assert disagreements > 0, f"no near-degenerate case among {checked}"
+
+
+# --------------------------------------------------------------------------------------------
+# find_crossings: properties against the reference
+# --------------------------------------------------------------------------------------------
+
+grid_chains = st.lists(
+    st.tuples(st.integers(0, 4), st.integers(0, 4)), min_size=3, max_size=12
+).filter(lambda pts: all(p != q for p, q in itertools.pairwise(pts)))
+
+
+@settings(max_examples=300, deadline=None)
+@given(pts=grid_chains)
+def test_find_crossings_matches_reference_on_integer_grid(pts):
+    """Small integer grids make every degeneracy common: collinear overlaps, nodes on segments,
+    shared endpoints, exact fold-backs."""
+    pos = np.array(pts, dtype=float)
+    got = [tuple(h) for h in find_crossings(pos).tolist()]
+    assert got == ref_crossings(pos)
+    assert has_crossings(pos) == bool(got)
+
+
+@settings(max_examples=100, deadline=None)
+@given(pts=grid_chains, scale=st.sampled_from([1e-7, 0.1, 1 / 3, 7.3e5]), shift=st.floats(-3, 3))
+def test_find_crossings_matches_reference_scaled_grid(pts, scale, shift):
+    """The same degenerate layouts, scaled and shifted so coordinates are not small integers
+    (the products then round, and the exact fallback has to decide)."""
+    pos = np.array(pts, dtype=float) * scale + shift
+    got = [tuple(h) for h in find_crossings(pos).tolist()]
+    assert got == ref_crossings(pos)
+
+
+@settings(max_examples=150, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 40), turn=st.sampled_from([1.0, 2.5, 3.1]))
+def test_find_crossings_matches_reference_on_random_walks(seed, n, turn):
+    pos = random_walk(np.random.default_rng(seed), n, turn)
+    got = [tuple(h) for h in find_crossings(pos).tolist()]
+    assert got == ref_crossings(pos)
+
+
+def test_find_crossings_large_integer_walk_against_vectorised_brute_force():
+    """A long random walk on an integer lattice (exact in doubles: |coords| < 2^20) checked
+    against an O(N^2) exact integer brute force: exercises the spatial hash at scale."""
+    rng = np.random.default_rng(7)
+    steps = rng.integers(-3, 4, size=(1500, 2))
+    steps = steps[np.any(steps != 0, axis=1)]
+    pos = np.vstack([[0, 0], np.cumsum(steps, axis=0)]).astype(np.int64)
+    ns = len(pos) - 1
+    p1, p2 = pos[:-1], pos[1:]
+
+    def orient(a, b, c):
+        return np.sign(
+            (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+        )
+
+    def within(a, b, c):
+        return (np.minimum(a, b) <= c) & (c <= np.maximum(a, b))
+
+    i, j = np.triu_indices(ns, k=2)
+    a, b, c, d = p1[i], p2[i], p1[j], p2[j]
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+
+    def on(o, s, e, q):
+        return (o == 0) & within(s[:, 0], e[:, 0], q[:, 0]) & within(s[:, 1], e[:, 1], q[:, 1])
+
+    hit = (
+        ((o1 * o2 < 0) & (o3 * o4 < 0))
+        | on(o1, a, b, c)
+        | on(o2, a, b, d)
+        | on(o3, c, d, a)
+        | on(o4, c, d, b)
+    )
+    want = set(zip(i[hit].tolist(), j[hit].tolist(), strict=True))
+    k = np.arange(ns - 1)  # adjacent pairs: exact fold-backs
+    u, v = p2[:-1] - p1[:-1], p2[1:] - p1[1:]
+    fold = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0] == 0) & ((u * v).sum(1) < 0)
+    want |= {(int(x), int(x) + 1) for x in k[fold]}
+    got = {tuple(h) for h in find_crossings(pos.astype(float)).tolist()}
+    assert len(want) > 100  # a dense tangle: the test has teeth
+    assert got == want
+
+
+# --------------------------------------------------------------------------------------------
+# Lengths and angles
+# --------------------------------------------------------------------------------------------
+
+
+def test_turning_angles_sign_convention_regular_polygon():
+    n = 7
+    phi = 2 * np.pi * np.arange(n + 1) / n
+    ccw = 2.5 * np.c_[np.cos(phi), np.sin(phi)]
+    np.testing.assert_allclose(turning_angles(ccw), 2 * np.pi / n, rtol=1e-12)
+    np.testing.assert_allclose(turning_angles(ccw[::-1]), -2 * np.pi / n, rtol=1e-12)
+    np.testing.assert_allclose(segment_lengths(ccw), 2 * 2.5 * np.sin(np.pi / n), rtol=1e-12)
+
+
+def test_turning_angles_range_includes_pi():
+    assert turning_angles([[0, 0], [1, 0], [0, 0]])[0] == pytest.approx(np.pi)
+    assert turning_angles([[0, 0], [1, 0], [2, 0]])[0] == 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# Continuous collision detection
+# --------------------------------------------------------------------------------------------
+
+
+def _assert_safe_path(pos, step, t, samples=60, fraction=0.999):
+    """No crossing anywhere on the straight path up to (just before) t."""
+    for tt in np.linspace(0.0, fraction * t, samples):
+        assert not has_crossings(pos + tt * step), f"crossing at t' = {tt} < t = {t}"
+
+
+def test_ccd_node_dives_through_segment():
+    pos = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0], [0.5, 0.5]])
+    step = np.zeros_like(pos)
+    step[4] = [0.0, -2.0]  # contact with y = 0 at a quarter of the step
+    t = max_safe_fraction(pos, step)
+    assert t == pytest.approx(0.25, rel=1e-9)
+    assert has_crossings(pos + step)
+    _assert_safe_path(pos, step, t)
+    assert has_crossings(pos + 1.001 * t * step)  # tight: just past t it has gone through
+
+
+def test_ccd_segment_sweeps_onto_still_node():
+    """Both ends of segment 0 move up together; the last node of the wire stands in the way."""
+    pos = np.array(
+        [[0.0, 0.0], [2.0, 0.0], [2.0, -1.0], [3.0, -1.0], [3.0, 2.0], [1.0, 2.0], [1.0, 1.0]]
+    )
+    step = np.zeros_like(pos)
+    step[[0, 1]] = [0.0, 3.0]
+    t = max_safe_fraction(pos, step)
+    assert t == pytest.approx(1.0 / 3.0, rel=1e-9)
+    assert has_crossings(pos + step)
+    _assert_safe_path(pos, step, t)
+
+
+def test_ccd_rotating_segment_quadratic_contact():
+    """Segment 0 rotates (its far end moves, its near end stays): the contact time solves a
+    quadratic. Reference: bisection on the exact crossing test."""
+    pos = np.array(
+        [[0.0, 0.0], [2.0, 0.0], [2.0, -1.0], [3.0, -1.0], [3.0, 2.0], [1.2, 2.0], [1.2, 0.7]]
+    )
+    step = np.zeros_like(pos)
+    step[1] = [-0.6, 1.5]
+    step[6] = [0.1, -0.1]
+    t = max_safe_fraction(pos, step)
+    assert 0 < t < 1
+    lo, hi = 0.0, 1.0
+    assert has_crossings(pos + hi * step)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if has_crossings(pos + mid * step):
+            hi = mid
+        else:
+            lo = mid
+    # bisection finds *a* crossing time; check there is none before it, so it is the first
+    _assert_safe_path(pos, step, lo, samples=200)
+    assert t == pytest.approx(lo, rel=1e-6)
+
+
+def test_ccd_safe_steps_return_one():
+    rng = np.random.default_rng(3)
+    pos = random_walk(rng, 30, turn=0.5)
+    assert not has_crossings(pos)
+    assert max_safe_fraction(pos, np.zeros_like(pos)) == 1.0
+    assert max_safe_fraction(pos, np.tile([3.0, -2.0], (len(pos), 1))) == 1.0  # translation
+    c, s = np.cos(0.3), np.sin(0.3)
+    rotated = pos @ np.array([[c, s], [-s, c]])
+    # a rotation is not a straight-line motion of the nodes, but the chord path of a small
+    # rotation keeps the shape (up to a uniform scale) at every t
+    assert max_safe_fraction(pos, rotated - pos) == 1.0
+    assert max_safe_fraction(pos, 1e-3 * rng.standard_normal(pos.shape)) == 1.0
+
+
+def test_ccd_straight_wire_sliding_along_itself():
+    pos = np.c_[np.linspace(0, 1, 11), np.zeros(11)]
+    assert max_safe_fraction(pos, np.tile([0.5, 0.0], (11, 1))) == 1.0
+
+
+def test_ccd_motion_along_the_wire_line():
+    """A straight two-segment wire whose end nodes slide along its own line: node 2 reaches
+    node 1 at t = 1/3 and the wire is folded back onto itself (an exact overlap) after that.
+    Every node-segment pair is collinear here, so the contact is not a root of the usual
+    quadratic; it must still be found."""
+    pos = np.array([[0.0, 0.4], [0.0, 0.1], [0.0, 0.0]])
+    step = np.array([[0.0, 0.3], [0.0, 0.0], [0.0, 0.3]])
+    assert not has_crossings(pos)
+    assert has_crossings(pos + 0.5 * step)
+    t = max_safe_fraction(pos, step)
+    assert t <= 1.0 / 3.0 + 1e-12
+    _assert_safe_path(pos, step, t)
+
+
+def test_ccd_rejects_mismatched_step():
+    with pytest.raises(ValueError, match="shape"):
+        max_safe_fraction(np.zeros((4, 2)), np.zeros((3, 2)))
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 25),
+    amplitude=st.sampled_from([0.1, 0.5, 1.0, 3.0]),
+)
+def test_ccd_property_no_crossing_before_t_and_t_below_one_when_endpoint_crosses(
+    seed, n, amplitude
+):
+    rng = np.random.default_rng(seed)
+    pos = random_walk(rng, n, turn=2.5)
+    assume(not has_crossings(pos))
+    step = amplitude * rng.standard_normal(pos.shape)
+    t = max_safe_fraction(pos, step)
+    assert 0.0 <= t <= 1.0
+    if has_crossings(pos + step):
+        assert t < 1.0
+    _assert_safe_path(pos, step, t, samples=40)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    pts=grid_chains,
+    moves=st.lists(st.tuples(st.integers(-3, 3), st.integers(-3, 3)), min_size=12, max_size=12),
+    scale=st.sampled_from([1.0, 0.1, 1e-5, 3e-7]),
+)
+def test_ccd_property_on_degenerate_grid_layouts(pts, moves, scale):
+    """Grid layouts and grid moves: collinear motions, nodes passing exactly through nodes.
+    If the wire crosses itself strictly before the end of the step (at 0.99), t must stop
+    short of that; and nothing crosses before t. Margin: a start within round-off of a contact
+    puts the root t itself within round-off (seen: t = 2e-16 off by 1%), so the path is
+    checked up to 0.8 t, the fraction Newton actually takes."""
+    pos = np.array(pts, dtype=float) * scale
+    assume(not has_crossings(pos))
+    step = np.array(moves[: len(pts)], dtype=float) * scale
+    t = max_safe_fraction(pos, step)
+    if has_crossings(pos + 0.99 * step):
+        assert t <= 0.99
+    _assert_safe_path(pos, step, t, samples=30, fraction=0.8)
+
+
+# --------------------------------------------------------------------------------------------
+# Node-segment pairs and segment distances
+# --------------------------------------------------------------------------------------------
+
+
+def test_node_segment_pairs_hairpin():
+    k, j = node_segment_pairs([[0, 0], [1, 0], [1, 0.1], [0, 0.1]], 0.2)
+    assert sorted(zip(k.tolist(), j.tolist(), strict=True)) == [(0, 2), (1, 2), (2, 0), (3, 0)]
+    k, j = node_segment_pairs([[0, 0], [1, 0], [1, 0.1], [0, 0.1]], 0.1)  # strict: D < cutoff
+    assert k.size == 0
+
+
+def test_node_segment_pairs_sharp_fold_sees_next_but_one_segment():
+    """Node k and segment k + 1 are kept (segment k - 1, which holds k, is not adjacent to
+    k + 1): a fold of nearly π brings them together."""
+    pos = np.array([[0, 0], [1, 0], [2, 0], [1.0, 0.01], [0.0, 0.01]])
+    pairs = set(zip(*(a.tolist() for a in node_segment_pairs(pos, 0.05)), strict=True))
+    assert pairs == ref_node_segment_pairs(pos, 0.05)
+    assert (1, 2) in pairs and (1, 3) in pairs and (0, 1) not in pairs
+
+
+@settings(max_examples=120, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 60),
+    cutoff=st.sampled_from([0.05, 0.3, 1.0, 2.5]),
+    turn=st.sampled_from([1.0, 2.5, 3.1]),
+)
+def test_node_segment_pairs_match_brute_force(seed, n, cutoff, turn):
+    pos = random_walk(np.random.default_rng(seed), n, turn) * 0.7 + 100.0
+    k, j = node_segment_pairs(pos, cutoff)
+    got = list(zip(k.tolist(), j.tolist(), strict=True))
+    assert len(got) == len(set(got)), "a pair reported twice"
+    assert set(got) == ref_node_segment_pairs(pos, cutoff)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1), n=st.integers(4, 40), cutoff=st.sampled_from([0.1, 0.6, 2.0])
+)
+def test_close_segment_pairs_match_brute_force(seed, n, cutoff):
+    pos = random_walk(np.random.default_rng(seed), n, 2.5)
+    pairs, dist = close_segment_pairs(pos, cutoff)
+    want = {}
+    for i in range(n):
+        for jj in range(i + 2, n):
+            d = ref_segment_distance(pos, i, jj)
+            if d < cutoff:
+                want[(i, jj)] = d
+    got = {tuple(p): d for p, d in zip(pairs.tolist(), dist.tolist(), strict=True)}
+    # a pair at distance within round-off of the cutoff may go either way
+    border = {p for p, d in want.items() if abs(d - cutoff) < 1e-12}
+    assert set(got) - border == set(want) - border
+    for p in set(got) & set(want):
+        assert got[p] == pytest.approx(want[p], rel=1e-12, abs=1e-15)
+        assert segment_distance(pos, *p) == pytest.approx(want[p], rel=1e-12, abs=1e-15)
+
+
+def test_segment_distance_validation_and_values():
+    pos = [[0, 0], [1, 0], [1, 0.1], [0, 0.1]]
+    assert segment_distance(pos, 0, 2) == pytest.approx(0.1)
+    assert segment_distance([[0, 0], [2, 0], [2, 1], [1, 1], [1, -1]], 0, 3) == 0.0
+    with pytest.raises(ValueError):
+        segment_distance(pos, 0, 1)
+    with pytest.raises(ValueError, match="cutoff"):
+        node_segment_pairs(pos, -1.0)
+    with pytest.raises(ValueError, match="cutoff"):
+        close_segment_pairs(pos, float("nan"))

@@ -1,0 +1,447 @@
+"""Tests of crumple.minimize on problems with known answers: convergence, honest failure
+reports, saddle escape, the admissibility hooks, and the monotone-descent invariant.
+
+About the tolerance in the descent invariant: near a minimum the decrease of the energy falls
+below the floating-point resolution of E itself. :func:`newton` then accepts a step whose energy
+change lies within ``resolution(E) = 16 ε_mach |E|`` if it strictly lowers the largest force
+(Hager & Zhang's approximate Wolfe condition). So "an accepted step never raises the energy"
+is checked as ``E_{k+1} <= E_k + resolution(E_k)``: the allowance is the round-off of E, not a
+physical tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import rosen, rosen_der, rosen_hess
+
+from crumple.minimize import (
+    MinimizeResult,
+    max_force,
+    newton,
+    powell,
+    random_directions,
+    resolution,
+)
+
+# --------------------------------------------------------------------------------------------
+# Test problems
+# --------------------------------------------------------------------------------------------
+
+
+def rosenbrock(x):
+    return float(rosen(x)), rosen_der(x)
+
+
+def saddle(x):
+    """f = x^2 - y^2 + y^4: a saddle at the origin, minima at (0, ±1/√2) with f = -1/4."""
+    return float(x[0] ** 2 - x[1] ** 2 + x[1] ** 4), np.array([2 * x[0], -2 * x[1] + 4 * x[1] ** 3])
+
+
+def saddle_hess(x):
+    return np.diag([2.0, -2.0 + 12.0 * x[1] ** 2])
+
+
+class Recorder:
+    """A callback that keeps every accepted step and checks the descent invariant."""
+
+    def __init__(self, fun, x0):
+        self.energies = [fun(np.asarray(x0, dtype=float))[0]]
+        self.points = [np.array(x0, dtype=float)]
+        self.forces = []
+        self.iterations = []
+
+    def __call__(self, it, x, e, fmax):
+        self.iterations.append(it)
+        self.points.append(np.array(x, copy=True))
+        self.energies.append(e)
+        self.forces.append(fmax)
+
+    def assert_monotone(self):
+        e = np.array(self.energies)
+        # an accepted step may raise E by at most its floating-point resolution (see top)
+        allowed = np.array([resolution(v) for v in e[:-1]])
+        rises = np.diff(e)
+        bad = np.nonzero(rises > allowed)[0]
+        assert bad.size == 0, f"energy rose at steps {bad}: {rises[bad]} > {allowed[bad]}"
+
+
+def assert_result_is_honest(r: MinimizeResult):
+    assert isinstance(r, MinimizeResult)
+    assert isinstance(r.message, str) and r.message
+    assert r.converged == (r.max_force <= r.ftol) or (not r.converged and "unstable" in r.message)
+    if not r.converged:
+        assert "converged" not in r.message or "not" in r.message
+
+
+# --------------------------------------------------------------------------------------------
+# Newton: convergence on known problems
+# --------------------------------------------------------------------------------------------
+
+
+def test_quadratic_in_one_step():
+    a = np.array([[4.0, 1.0], [1.0, 3.0]])
+    b = np.array([1.0, -2.0])
+
+    def f(x):
+        return float(0.5 * x @ a @ x - b @ x), a @ x - b
+
+    r = newton(f, [10.0, -7.0], hess=lambda x: a)
+    assert r.converged and r.iterations == 1
+    np.testing.assert_allclose(r.x, np.linalg.solve(a, b), rtol=1e-12)
+    assert r.max_force == pytest.approx(max_force(f(r.x)[1]))
+    assert r.energy == pytest.approx(f(r.x)[0])
+    assert r.method == "newton" and r.evaluations >= 2 and r.hessian_evaluations >= 1
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_quadratic_on_node_arrays(sparse):
+    """Rows of an (n, 2) array; force = row norm; dense or sparse Hessian."""
+    rng = np.random.default_rng(0)
+    n = 30
+    m = rng.standard_normal((2 * n, 2 * n))
+    a = m @ m.T + 2 * n * np.eye(2 * n)
+    target = rng.standard_normal((n, 2))
+
+    def f(x):
+        d = (x - target).ravel()
+        return float(0.5 * d @ a @ d), (a @ d).reshape(n, 2)
+
+    r = newton(f, np.zeros((n, 2)), hess=lambda x: sp.csc_matrix(a) if sparse else a, ftol=1e-10)
+    assert r.converged
+    assert r.x.shape == (n, 2)
+    np.testing.assert_allclose(r.x, target, atol=1e-10)
+
+
+@pytest.mark.parametrize("x0", [[-1.2, 1.0], [2.0, -1.5], [0.0, 3.0]])
+def test_rosenbrock_2d(x0):
+    rec = Recorder(rosenbrock, x0)
+    r = newton(rosenbrock, x0, hess=rosen_hess, ftol=1e-8, callback=rec)
+    assert r.converged, r.message
+    np.testing.assert_allclose(r.x, [1.0, 1.0], atol=1e-8)
+    assert r.max_force <= 1e-8
+    assert "converged" in r.message
+    rec.assert_monotone()
+    assert len(rec.iterations) == r.iterations
+    assert rec.iterations == list(range(1, r.iterations + 1))
+    np.testing.assert_array_equal(rec.points[-1], r.x)
+    assert rec.energies[-1] == r.energy
+
+
+@pytest.mark.parametrize("n", [3, 6, 10])
+def test_rosenbrock_nd_sparse_hessian(n):
+    r = newton(rosenbrock, -np.ones(n), hess=lambda x: sp.csc_matrix(rosen_hess(x)), ftol=1e-9)
+    assert r.converged, r.message
+    np.testing.assert_allclose(r.x, np.ones(n), atol=1e-8)
+
+
+def test_too_few_iterations_is_reported_never_silent():
+    r = newton(rosenbrock, [-1.2, 1.0], hess=rosen_hess, maxiter=3)
+    assert not r.converged
+    assert r.iterations == 3
+    assert r.max_force > r.ftol
+    assert "maximum number of iterations" in r.message
+    assert_result_is_honest(r)
+
+
+def test_unfactorisable_hessian_is_reported():
+    r = newton(rosenbrock, [-1.2, 1.0], hess=lambda x: np.full((2, 2), np.nan))
+    assert not r.converged
+    assert "positive definite" in r.message
+    np.testing.assert_array_equal(r.x, [-1.2, 1.0])  # nothing accepted
+
+
+def test_gradient_inconsistent_with_energy_is_reported():
+    """A gradient with the wrong sign: every proposed step goes uphill, no step can be
+    accepted, and the solver must stop and say so (not loop, not claim equilibrium)."""
+
+    def f(x):
+        return float(x @ x), -2 * x
+
+    rec = Recorder(f, [1.0, -1.0])
+    r = newton(f, [1.0, -1.0], hess=lambda x: 2 * np.eye(2), callback=rec, maxiter=100)
+    assert not r.converged
+    assert r.max_force > r.ftol
+    assert_result_is_honest(r)
+    rec.assert_monotone()
+
+
+# --------------------------------------------------------------------------------------------
+# Newton: saddle escape
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+@pytest.mark.parametrize("x0", [[1e-3, 0.0], [0.0, 0.0], [-0.5, 0.0]])
+def test_saddle_escape_reaches_a_true_minimum(x0, sparse):
+    """Started on the ridge y = 0 (the gradient has no y-component there), plain Newton would
+    stop at the saddle (0, 0); the solver must detect the negative curvature and go down to
+    a minimum y = ±1/√2."""
+    hess = (lambda x: sp.csc_matrix(saddle_hess(x))) if sparse else saddle_hess
+    rec = Recorder(saddle, x0)
+    r = newton(saddle, x0, hess=hess, callback=rec)
+    assert r.converged, r.message
+    assert abs(r.x[1]) == pytest.approx(1 / math.sqrt(2), rel=1e-6)
+    assert r.x[0] == pytest.approx(0.0, abs=1e-6)
+    assert r.energy == pytest.approx(-0.25, abs=1e-10)
+    assert "escape" in r.message
+    rec.assert_monotone()
+
+
+def test_every_iterate_is_reported_to_the_callback():
+    """The callback is documented to run after *every* accepted step. The solver evaluates the
+    Hessian only at its current iterate, so every point where it does (except the start) must
+    have been reported first: this includes the saddle-escape step."""
+    seen: list[np.ndarray] = []
+    hessian_points: list[np.ndarray] = []
+
+    def hess(x):
+        hessian_points.append(np.array(x, copy=True))
+        return saddle_hess(x)
+
+    def callback(it, x, e, fmax):
+        seen.append(np.array(x, copy=True))
+
+    x0 = np.array([0.0, 0.0])
+    r = newton(saddle, x0, hess=hess, callback=callback)
+    assert r.converged
+    for p in hessian_points:
+        if np.array_equal(p, x0):
+            continue
+        assert any(np.array_equal(p, q) for q in seen), f"iterate {p} never reported"
+
+
+def test_stable_minimum_with_a_zero_mode_is_accepted():
+    """A symmetry zero mode (here f depends on |x| only) must not count as instability."""
+
+    def f(x):
+        r2 = float(x @ x)
+        return (r2 - 1.0) ** 2, 4 * (r2 - 1.0) * x
+
+    def h(x):
+        r2 = float(x @ x)
+        return 4 * (r2 - 1.0) * np.eye(2) + 8 * np.outer(x, x)
+
+    r = newton(f, [0.3, 0.4], hess=h, ftol=1e-10)
+    assert r.converged, r.message
+    assert np.hypot(*r.x) == pytest.approx(1.0, rel=1e-9)
+    assert "escape" not in r.message
+
+
+# --------------------------------------------------------------------------------------------
+# Newton: step control and admissibility hooks
+# --------------------------------------------------------------------------------------------
+
+
+def test_max_step_caps_every_row_displacement():
+    target = np.full((5, 2), 10.0)
+
+    def f(x):
+        d = x - target
+        return float((d * d).sum()), 2 * d
+
+    rec = Recorder(f, np.zeros((5, 2)))
+    r = newton(f, np.zeros((5, 2)), hess=lambda x: 2 * np.eye(10), max_step=0.5, callback=rec)
+    assert r.converged
+    np.testing.assert_allclose(r.x, target, atol=1e-9)
+    steps = [np.max(np.hypot(*(b - a).T)) for a, b in zip(rec.points, rec.points[1:], strict=False)]
+    assert max(steps) <= 0.5 * (1 + 1e-12)
+    assert r.iterations >= 10 * math.sqrt(2) / 0.5 - 1  # it had to walk
+
+
+def test_feasible_and_step_limit_keep_iterates_admissible():
+    """Minimum at x = 2, wall at x = 1: the solver may approach but never cross; it cannot
+    converge and must say so."""
+
+    def f(x):
+        return float((x[0] - 2) ** 2 + x[1] ** 2), np.array([2 * (x[0] - 2), 2 * x[1]])
+
+    def step_limit(x, p):
+        return 1.0 if x[0] + p[0] < 1 else max(0.0, (1 - x[0]) / p[0])
+
+    def feasible(x):
+        return x[0] < 1
+
+    rec = Recorder(f, [0.0, 0.5])
+    r = newton(
+        f, [0.0, 0.5], hess=lambda x: 2 * np.eye(2), step_limit=step_limit, feasible=feasible,
+        callback=rec, maxiter=50,
+    )  # fmt: skip
+    assert not r.converged
+    assert_result_is_honest(r)
+    assert all(feasible(p) for p in rec.points)
+    assert r.x[0] > 0.99  # it went as far as it could
+    rec.assert_monotone()
+
+
+def test_feasible_alone_rejects_bad_points():
+    def f(x):
+        return float((x[0] - 2) ** 2), np.array([2 * (x[0] - 2)])
+
+    rec = Recorder(f, [0.0])
+    r = newton(
+        f, [0.0], hess=lambda x: np.array([[2.0]]), feasible=lambda x: x[0] < 1, callback=rec
+    )
+    assert not r.converged
+    assert all(p[0] < 1 for p in rec.points)
+    assert_result_is_honest(r)
+
+
+def test_input_validation():
+    with pytest.raises(ValueError, match="feasible"):
+        newton(rosenbrock, [0.0, 0.0], hess=rosen_hess, feasible=lambda x: False)
+    with pytest.raises(ValueError, match="NaN"):
+        newton(rosenbrock, [np.nan, 0.0], hess=rosen_hess)
+    with pytest.raises(ValueError, match="ftol"):
+        newton(rosenbrock, [0.0, 0.0], hess=rosen_hess, ftol=0.0)
+    with pytest.raises(ValueError, match="maxiter"):
+        newton(rosenbrock, [0.0, 0.0], hess=rosen_hess, maxiter=0)
+    with pytest.raises(ValueError, match="max_step"):
+        newton(rosenbrock, [0.0, 0.0], hess=rosen_hess, max_step=-1.0)
+    with pytest.raises(ValueError, match="energy"):
+        newton(lambda x: (math.inf, np.zeros(2)), [0.0, 0.0], hess=rosen_hess)
+    with pytest.raises(ValueError):
+        newton(rosenbrock, [], hess=rosen_hess)
+
+
+# --------------------------------------------------------------------------------------------
+# Newton: the descent invariant as a property
+# --------------------------------------------------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    x0=st.lists(st.floats(-3, 3), min_size=2, max_size=8),
+    max_step=st.one_of(st.none(), st.floats(0.1, 2.0)),
+    sparse=st.booleans(),
+)
+def test_accepted_steps_never_raise_the_energy(x0, max_step, sparse):
+    hess = (lambda x: sp.csc_matrix(rosen_hess(x))) if sparse else rosen_hess
+    rec = Recorder(rosenbrock, x0)
+    # a capped step walks the curved valley slowly (measured: 376 iterations from (3, 0, 0)
+    # with max_step = 0.125), hence the generous maxiter
+    r = newton(rosenbrock, x0, hess=hess, max_step=max_step, ftol=1e-9, callback=rec, maxiter=3000)
+    rec.assert_monotone()
+    assert_result_is_honest(r)
+    assert r.converged, r.message
+    assert r.energy <= rec.energies[0] + resolution(rec.energies[0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12))
+def test_accepted_steps_never_raise_the_energy_nonconvex(seed, n):
+    """A random smooth non-convex function: Σ a_i cos(x_i) + quartic bowl + random coupling."""
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(1, 5, n)
+    c = rng.standard_normal((n, n)) * 0.3
+    c = c + c.T
+
+    def f(x):
+        e = float(np.sum(a * np.cos(3 * x)) + 0.1 * np.sum(x**4) + 0.5 * x @ c @ x)
+        return e, -3 * a * np.sin(3 * x) + 0.4 * x**3 + c @ x
+
+    def h(x):
+        return np.diag(-9 * a * np.cos(3 * x) + 1.2 * x**2) + c
+
+    x0 = rng.uniform(-2, 2, n)
+    rec = Recorder(f, x0)
+    r = newton(f, x0, hess=h, ftol=1e-9, callback=rec)
+    rec.assert_monotone()
+    assert r.converged, r.message
+    # a true minimum: the Hessian there is positive semi-definite
+    assert np.linalg.eigvalsh(h(r.x)).min() > -1e-8
+
+
+# --------------------------------------------------------------------------------------------
+# Powell (the paper's method)
+# --------------------------------------------------------------------------------------------
+
+
+def quad(x):
+    return float((x[0] - 1) ** 2 + 10 * (x[1] + 2) ** 2 + 0.5 * x[2] ** 2)
+
+
+def quad_grad(x):
+    return np.array([2 * (x[0] - 1), 20 * (x[1] + 2), x[2]])
+
+
+def test_powell_typed_result_with_force_from_the_gradient():
+    r = powell(quad, [0.0, 0.0, 3.0], rng=np.random.default_rng(1), gradient=quad_grad)
+    assert isinstance(r, MinimizeResult)
+    assert r.method == "powell"
+    assert r.converged, r.message
+    np.testing.assert_allclose(r.x, [1.0, -2.0, 0.0], atol=1e-6)
+    assert r.max_force == max_force(quad_grad(r.x))
+    assert r.energy == quad(r.x)
+    assert r.evaluations > 0 and r.iterations > 0 and r.hessian_evaluations == 0
+    assert r.message.startswith("powell")
+
+
+def test_powell_without_gradient_cannot_claim_convergence():
+    r = powell(quad, [0.0, 0.0, 3.0], rng=np.random.default_rng(1))
+    assert math.isnan(r.max_force)
+    assert not r.converged
+
+
+def test_powell_stopped_early_reports_it():
+    r = powell(
+        lambda x: float(rosen(x)),
+        -np.ones(6),
+        rng=np.random.default_rng(2),
+        gradient=rosen_der,
+        maxiter=2,
+    )
+    assert not r.converged
+    assert r.max_force > r.ftol
+    assert_result_is_honest(r)
+
+
+def test_powell_respects_feasibility_and_is_seeded():
+    """Infeasible points get energy +inf; Powell must handle that quietly (the project turns
+    warnings into errors, and a ramp with method="powell" probes crossings all the time)."""
+
+    def feasible(x):
+        return x[0] <= 0.5
+
+    runs = [
+        powell(
+            quad,
+            [0.0, 0.0, 3.0],
+            rng=np.random.default_rng(s),
+            gradient=quad_grad,
+            feasible=feasible,
+        )
+        for s in (5, 5, 6)
+    ]
+    for r in runs:
+        assert feasible(r.x)
+        assert r.x[0] > 0.4
+        assert not r.converged  # the constrained optimum is not a force-free point
+    np.testing.assert_array_equal(runs[0].x, runs[1].x)
+    assert runs[0].evaluations == runs[1].evaluations
+
+
+def test_random_directions_orthonormal_and_seeded():
+    q = random_directions(7, np.random.default_rng(3))
+    np.testing.assert_allclose(q @ q.T, np.eye(7), atol=1e-12)
+    np.testing.assert_array_equal(q, random_directions(7, np.random.default_rng(3)))
+    assert not np.allclose(q, random_directions(7, np.random.default_rng(4)))
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------------------------
+
+
+def test_max_force_and_resolution():
+    assert max_force(np.array([[3.0, 4.0], [0.0, 1.0]])) == 5.0
+    assert max_force(np.array([-2.0, 1.0])) == 2.0
+    assert max_force(np.zeros((0, 2))) == 0.0
+    assert resolution(1.0) == 16 * np.finfo(float).eps
+    assert resolution(-3.0) == 48 * np.finfo(float).eps
+    assert resolution(0.0) > 0

@@ -1,0 +1,428 @@
+"""Tests of crumple.protocol: the quasi-static ramp's invariants over the paper's Table 1
+ranges (hypothesis), the default ramp, determinism and replicas, buckling of the straight
+wire, and convergence of a continuum-parameter ramp with N.
+
+The descent invariant allows a rise of at most ``resolution(E) = 16 ε_mach |E|`` per accepted
+Newton step: that is the floating-point resolution of the energy value (below it the solver
+decides by the force, Hager & Zhang's approximate Wolfe condition), not a physical tolerance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import crumple.protocol as protocol
+from crumple.energy import WireEnergy
+from crumple.geometry import find_crossings, has_crossings, max_safe_fraction
+from crumple.minimize import MinimizeResult, resolution
+from crumple.model import Plasticity, Wire
+from crumple.protocol import (
+    PAPER_LAMBDAS,
+    Ramp,
+    RampResult,
+    default_schedule,
+    initial_state,
+    minimize_wire,
+    replica_seeds,
+    run_ramp,
+    run_replicas,
+)
+
+# --------------------------------------------------------------------------------------------
+# An audit of every accepted Newton step, wrapped around the solver the protocol calls
+# --------------------------------------------------------------------------------------------
+
+
+class StepAudit:
+    """Replaces ``crumple.protocol.newton`` by the real solver plus a callback that checks, at
+    every accepted step, that the energy did not rise beyond its resolution and that the wire
+    does not cross itself (exact test)."""
+
+    def __init__(self):
+        self.real = protocol.newton
+        self.steps = 0
+        self.calls = 0
+        self.violations: list[str] = []
+
+    def __call__(self, fun, x0, **kwargs):
+        assert "callback" not in kwargs
+        self.calls += 1
+        last = [fun(x0)[0]]
+
+        def callback(it, x, e, fmax):
+            self.steps += 1
+            if e > last[0] + resolution(last[0]):
+                self.violations.append(f"call {self.calls} step {it}: E {last[0]!r} -> {e!r}")
+            crossings = find_crossings(x)
+            if crossings.size:
+                self.violations.append(
+                    f"call {self.calls} step {it}: crossings {crossings.tolist()}"
+                )
+            last[0] = e
+
+        return self.real(fun, x0, callback=callback, **kwargs)
+
+
+def audited_ramp(wire, ramp, seed):
+    audit = StepAudit()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(protocol, "newton", audit)
+        result = run_ramp(wire, ramp, seed=seed)
+    return result, audit
+
+
+def assert_stage_bookkeeping(result: RampResult):
+    """Every stage: crossing-free, its energy record consistent with its positions and with
+    the minimiser's result, and an honest convergence flag."""
+    wire = result.wire
+    for stage in result.stages:
+        assert not has_crossings(stage.positions)
+        assert stage.positions.shape == (wire.n_nodes, 2)
+        terms = WireEnergy(wire, stage.lam).terms(stage.positions)
+        assert stage.energy == terms
+        assert stage.energy.total == pytest.approx(stage.result.energy, rel=1e-12)
+        assert isinstance(stage.result, MinimizeResult)
+        if stage.result.converged:
+            assert stage.result.max_force <= stage.result.ftol
+        else:
+            assert stage.result.message
+        np.testing.assert_array_equal(stage.result.x, stage.positions)
+    failed = {lam for lam, _ in result.failed_stages}
+    assert failed == {s.lam for s in result.stages if not s.result.converged}
+    assert result.converged == (not failed)
+    assert all(msg for _, msg in result.failed_stages)
+
+
+def assert_quasi_static_descent(result: RampResult):
+    """Raising λ from λ_k to λ_{k+1} at fixed shape costs (λ_{k+1} - λ_k) Σ w r^2; the
+    minimiser then only lowers the energy: E_{k+1} <= E(x_k; λ_{k+1}) (+ resolution)."""
+    previous = result.initial
+    for stage in result.stages:
+        start = WireEnergy(result.wire, stage.lam)(previous)[0]
+        assert stage.energy.total <= start + resolution(start)
+        previous = stage.positions
+
+
+# --------------------------------------------------------------------------------------------
+# Invariants over Table 1's ranges (hypothesis)
+# --------------------------------------------------------------------------------------------
+
+table_1 = {
+    "k_b": st.floats(1.0, 10.0),
+    "log_k_s": st.floats(4.0, 7.0),
+    "n_segments": st.integers(20, 40),
+    "confinement": st.sampled_from(["per-node", "per-length"]),
+    "plasticity": st.one_of(
+        st.none(),
+        st.builds(Plasticity, s=st.floats(0.0, 1.0), theta_p=st.floats(0.05, 1.0)),
+    ),
+    "n_stages": st.integers(4, 6),
+    "stage_noise": st.sampled_from([0.0, 0.0, 0.2]),
+    "seed": st.integers(0, 2**32 - 1),
+}
+
+
+@settings(
+    max_examples=80,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+@given(**table_1)
+def test_ramp_never_crosses_and_no_accepted_step_raises_the_energy(
+    k_b, log_k_s, n_segments, confinement, plasticity, n_stages, stage_noise, seed
+):
+    wire = Wire(
+        k_b=k_b, k_s=10.0**log_k_s, n_segments=n_segments, confinement=confinement,
+        plasticity=plasticity,
+    )  # fmt: skip
+    ramp = Ramp(
+        lambdas=tuple(np.geomspace(1.0, 2000.0, n_stages)), stage_noise=stage_noise, maxiter=150
+    )
+    result, audit = audited_ramp(wire, ramp, seed)
+    assert audit.calls == n_stages
+    assert audit.steps > 0
+    assert not audit.violations, audit.violations[:5]
+    assert not has_crossings(result.initial)
+    assert_stage_bookkeeping(result)
+    if stage_noise == 0:
+        assert_quasi_static_descent(result)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), amplitude=st.floats(0.1, 3.0))
+def test_stage_noise_kick_never_crosses(seed, amplitude):
+    """The protocol's random kick, cut by continuous collision detection, on a folded wire
+    (the final stage of a short ramp) where a blind kick would often cross."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=24, confinement="per-node")
+    x = _folded_wire()
+    rng = np.random.default_rng(seed)
+    kick = amplitude * wire.rest_length * rng.standard_normal(x.shape)
+    safe = max_safe_fraction(x, kick)
+    moved = x + (kick if safe >= 1.0 else 0.5 * safe * kick)  # as run_ramp does
+    assert not has_crossings(moved)
+    assert WireEnergy(wire, 1000.0)(moved)[0] < math.inf
+
+
+_FOLDED: list[np.ndarray] = []
+
+
+def _folded_wire() -> np.ndarray:
+    if not _FOLDED:
+        wire = Wire(k_b=5, k_s=5e5, n_segments=24, confinement="per-node")
+        _FOLDED.append(
+            run_ramp(wire, Ramp(lambdas=(1, 30, 300, 1000)), seed=3).stages[-1].positions
+        )
+    return _FOLDED[0]
+
+
+# --------------------------------------------------------------------------------------------
+# The default ramp (N = 100, k_b = 5, k_s = 5e5, 44 stages)
+# --------------------------------------------------------------------------------------------
+
+
+def test_default_ramp_converges_at_every_stage():
+    wire = Wire(k_b=5, k_s=5e5)
+    result = run_ramp(wire, seed=0)
+    assert len(result.stages) == 44
+    np.testing.assert_array_equal(result.lambdas, default_schedule())
+    assert result.converged, result.failed_stages
+    assert result.failed_stages == []
+    for stage in result.stages:
+        assert stage.result.max_force <= 1e-6
+    assert_stage_bookkeeping(result)
+    assert_quasi_static_descent(result)
+    for lam in PAPER_LAMBDAS:
+        assert result.at(lam).lam == lam
+    energies = result.energies()
+    assert set(energies) == {"bending", "stretching", "confinement", "hard_core", "total"}
+    assert all(v.shape == (44,) for v in energies.values())
+    # the wire did crumple: it bent and shrank far below its length
+    final = result.stages[-1].positions
+    assert energies["bending"][-1] > 1.0
+    assert np.max(np.hypot(*(final - final.mean(axis=0)).T)) < 0.3
+
+
+def test_default_schedule():
+    s = default_schedule()
+    assert len(s) == 44
+    assert s[0] == 1.0 and s[-1] == 2000.0
+    assert all(b > a for a, b in itertools.pairwise(s))
+    assert set(PAPER_LAMBDAS) <= set(s)
+    assert default_schedule(1, 10, 5, include=()) == pytest.approx(tuple(np.geomspace(1, 10, 5)))
+    with pytest.raises(ValueError):
+        default_schedule(10, 1)
+
+
+# --------------------------------------------------------------------------------------------
+# Buckling: the straight wire is a saddle above the threshold
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("n_segments", [100, 400])  # dense Hessian, then sparse (> 800 dof)
+def test_straight_wire_buckles_above_threshold_and_not_below(n_segments):
+    """B = 0.05, S = 5000, per length. A perfectly straight wire is an equilibrium at every λ
+    (forces along the wire only); it must stay straight at λ = 2 and buckle at λ = 20, where
+    straight is a saddle. This exercises the solver's escape along negative curvature."""
+    wire = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n_segments)
+    straight = initial_state(wire, noise=0.0)
+    low = minimize_wire(wire, straight, 2.0)
+    assert low.converged, low.message
+    assert WireEnergy(wire, 2.0).terms(low.x).bending == pytest.approx(0.0, abs=1e-20)
+    high = minimize_wire(wire, straight, 20.0)
+    assert high.converged, high.message
+    terms = WireEnergy(wire, 20.0).terms(high.x)
+    assert terms.bending > 0.1
+    assert high.energy < WireEnergy(wire, 20.0)(straight)[0]
+    assert not has_crossings(high.x)
+
+
+# --------------------------------------------------------------------------------------------
+# Continuum limit: refining N at fixed (B, S) converges
+# --------------------------------------------------------------------------------------------
+
+
+def test_continuum_ramp_converges_with_n():
+    """B = 0.05, S = 5000, per-length confinement, λ up to 20 (buckled, no contacts yet).
+    Final equilibrium energy at N = 200 and 400 must agree within 1%. Measured when this test
+    was written: relative change 2.8e-5 from 200 to 400 and 1.1e-4 from 100 to 200, a ratio
+    of 4 (second order, as the trapezoid and the discrete curvature are). Check that too."""
+    ramp = Ramp(lambdas=tuple(np.geomspace(1.0, 20.0, 8)))
+    energies = {}
+    for n in (100, 200, 400):
+        wire = Wire.from_continuum(
+            bending=0.05, stretching=5000.0, n_segments=n, confinement="per-length"
+        )
+        result = run_ramp(wire, ramp, seed=0)
+        assert result.converged, result.failed_stages
+        final = result.stages[-1].energy
+        assert final.hard_core == 0.0  # before contacts
+        assert final.bending > 0.1  # after buckling
+        energies[n] = final.total
+    change = abs(energies[400] - energies[200]) / energies[400]
+    assert change < 0.01
+    ratio = abs(energies[200] - energies[100]) / abs(energies[400] - energies[200])
+    assert 3.0 < ratio < 5.0, (energies, ratio)
+
+
+# --------------------------------------------------------------------------------------------
+# Determinism and replicas
+# --------------------------------------------------------------------------------------------
+
+SMALL = Wire(k_b=5, k_s=5e5, n_segments=24)
+SHORT = Ramp(lambdas=(1.0, 10.0, 100.0, 1000.0))
+
+
+def test_same_seed_same_result():
+    a = run_ramp(SMALL, SHORT, seed=11)
+    b = run_ramp(SMALL, SHORT, seed=11)
+    np.testing.assert_array_equal(a.initial, b.initial)
+    for sa, sb in zip(a.stages, b.stages, strict=True):
+        np.testing.assert_array_equal(sa.positions, sb.positions)
+    c = run_ramp(SMALL, SHORT, seed=np.random.default_rng(11))
+    np.testing.assert_array_equal(c.stages[-1].positions, a.stages[-1].positions)
+
+
+def test_same_seed_same_result_with_stage_noise():
+    ramp = dataclasses.replace(SHORT, stage_noise=0.3)
+    a = run_ramp(SMALL, ramp, seed=5)
+    b = run_ramp(SMALL, ramp, seed=5)
+    for sa, sb in zip(a.stages, b.stages, strict=True):
+        np.testing.assert_array_equal(sa.positions, sb.positions)
+
+
+def test_replicas_do_not_depend_on_the_number_of_workers():
+    serial = run_replicas(SMALL, SHORT, n_replicas=3, seed=4, workers=1)
+    parallel = run_replicas(SMALL, SHORT, n_replicas=3, seed=4, workers=2)
+    assert len(serial) == len(parallel) == 3
+    for a, b in zip(serial, parallel, strict=True):
+        np.testing.assert_array_equal(a.initial, b.initial)
+        for sa, sb in zip(a.stages, b.stages, strict=True):
+            np.testing.assert_array_equal(sa.positions, sb.positions)
+    # replica r is run_ramp seeded with SeedSequence(seed).spawn(n)[r]
+    seeds = replica_seeds(4, 3)
+    alone = run_ramp(SMALL, SHORT, seed=np.random.default_rng(seeds[1]))
+    np.testing.assert_array_equal(alone.stages[-1].positions, serial[1].stages[-1].positions)
+
+
+def test_replicas_with_different_seeds_differ():
+    reps = run_replicas(SMALL, SHORT, n_replicas=3, seed=4, workers=1)
+    for i in range(3):
+        for j in range(i + 1, 3):
+            assert not np.allclose(reps[i].initial, reps[j].initial)
+            assert (
+                np.max(np.abs(reps[i].stages[-1].positions - reps[j].stages[-1].positions)) > 1e-3
+            )
+    other = run_replicas(SMALL, SHORT, n_replicas=1, seed=5, workers=1)[0]
+    assert not np.allclose(other.initial, reps[0].initial)
+
+
+def test_replica_seeds_are_independent_streams():
+    seeds = replica_seeds(7, 4)
+    assert [s.spawn_key for s in seeds] == [(0,), (1,), (2,), (3,)]
+    draws = [np.random.default_rng(s).random(5) for s in seeds]
+    assert len({tuple(d) for d in draws}) == 4
+    with pytest.raises(ValueError):
+        replica_seeds(7, 0)
+
+
+# --------------------------------------------------------------------------------------------
+# Ramp options, the initial state, and input checks
+# --------------------------------------------------------------------------------------------
+
+
+def test_initial_state_is_a_straight_centred_wire_with_transverse_noise():
+    wire = Wire(k_b=5, k_s=5e5, n_segments=50, trap_center=(0.3, -0.2))
+    x0 = initial_state(wire, noise=0.0)
+    np.testing.assert_allclose(x0[:, 0], np.linspace(-0.5, 0.5, 51) + 0.3, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(x0[:, 1], -0.2)
+    x = initial_state(wire, noise=0.1, seed=3)
+    np.testing.assert_array_equal(x[:, 0], x0[:, 0])  # transverse only
+    dy = x[:, 1] + 0.2
+    assert 0.03 * wire.rest_length < dy.std() < 0.3 * wire.rest_length
+    np.testing.assert_array_equal(x, initial_state(wire, noise=0.1, seed=3))
+    assert not has_crossings(initial_state(wire, noise=0.49, seed=1))
+    for bad in (-0.1, 0.5, math.nan):
+        with pytest.raises(ValueError, match="noise"):
+            initial_state(wire, noise=bad)
+
+
+def test_stop_when_the_structure_no_longer_changes():
+    result = run_ramp(SMALL, dataclasses.replace(SHORT, stop_tol=10.0), seed=1)
+    assert len(result.stages) == 2  # the second stage moved less than 10: stop there
+    full = run_ramp(SMALL, dataclasses.replace(SHORT, stop_tol=1e-12), seed=1)
+    assert len(full.stages) == 4
+
+
+def test_progress_is_reported_for_every_stage():
+    seen = []
+    run_ramp(SMALL, SHORT, seed=2, progress=lambda i, n, stage: seen.append((i, n, stage.lam)))
+    assert seen == [(i, 4, lam) for i, lam in enumerate(SHORT.lambdas)]
+
+
+def test_at_unknown_lambda_raises():
+    result = run_ramp(SMALL, Ramp(lambdas=(1.0, 2.0)), seed=0)
+    with pytest.raises(KeyError):
+        result.at(3.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "word"),
+    [
+        ({"lambdas": (10, 1)}, "increasing"),
+        ({"lambdas": (1, 1)}, "increasing"),
+        ({"lambdas": ()}, "empty"),
+        ({"lambdas": (-1, 1)}, "lambdas"),
+        ({"lambdas": (1, math.inf)}, "lambdas"),
+        ({"lambdas": ("a",)}, "lambdas"),
+        ({"initial_noise": -0.1}, "initial_noise"),
+        ({"stage_noise": math.nan}, "stage_noise"),
+        ({"stop_tol": 0.0}, "stop_tol"),
+        ({"method": "lbfgs"}, "method"),
+        ({"ftol": 0.0}, "ftol"),
+        ({"maxiter": 0}, "maxiter"),
+        ({"max_step": -1.0}, "max_step"),
+    ],
+)
+def test_ramp_validation(kwargs, word):
+    with pytest.raises(ValueError, match=word):
+        Ramp(**kwargs)
+
+
+def test_ramp_round_trip():
+    ramp = Ramp(lambdas=(1, 10), stage_noise=0.1, method="powell")
+    assert Ramp.from_dict(ramp.to_dict()) == ramp
+    with pytest.raises(ValueError, match="unknown"):
+        Ramp.from_dict({"lambda": (1, 2)})
+
+
+def test_minimize_wire_input_checks():
+    crossing = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, -1]], dtype=float)
+    wire = Wire(k_b=1, k_s=1e4, n_segments=4)
+    with pytest.raises(ValueError, match="crosses"):
+        minimize_wire(wire, crossing, 1.0)
+    with pytest.raises(ValueError, match="shape"):
+        minimize_wire(wire, np.zeros((3, 2)), 1.0)
+    straight = initial_state(wire, noise=0.0)
+    with pytest.raises(ValueError, match="rng"):
+        minimize_wire(wire, straight, 1.0, method="powell")
+    with pytest.raises(ValueError, match="method"):
+        minimize_wire(wire, straight, 1.0, method="fire")
+
+
+def test_powell_ramp_on_a_small_wire():
+    """The paper's method: slow and short of equilibrium, but typed, crossing-free, never
+    above the energy it started each stage from. Its infeasible probes (crossings, energy
+    +inf) must not spill floating-point warnings (the project turns warnings into errors)."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=10)
+    result = run_ramp(wire, Ramp(lambdas=(1.0, 100.0, 2000.0), method="powell", maxiter=5), seed=0)
+    assert all(s.result.method == "powell" for s in result.stages)
+    assert all(math.isfinite(s.result.max_force) for s in result.stages)
+    assert_stage_bookkeeping(result)
+    assert_quasi_static_descent(result)
