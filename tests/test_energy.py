@@ -834,3 +834,62 @@ def test_test_configurations_are_what_they_claim():
     geo = contact_geometry(ec, d)
     assert len(geo) == 2 and all(u == pytest.approx(0.5) for u, _ in geo)
     assert not has_crossings(ec)
+
+
+# --------------------------------------------------------------------------------------------
+# Imperfect wires: rest turning angles (Wire.rest_angle_sd)
+# --------------------------------------------------------------------------------------------
+
+
+def _chain_with_angles(angles, l0=0.1):
+    phi = np.r_[0.0, np.cumsum(angles)]
+    steps = l0 * np.c_[np.cos(phi), np.sin(phi)]
+    return np.r_[[[0.0, 0.0]], np.cumsum(steps, axis=0)]
+
+
+def test_wire_at_its_rest_angles_has_no_bending_energy():
+    rest = np.random.default_rng(4).normal(0.0, 0.3, 12)
+    x = _chain_with_angles(rest)
+    e, g = bending_energy(x, 7.0, rest_angles=rest)
+    assert e == pytest.approx(0.0, abs=1e-24)
+    np.testing.assert_allclose(g, 0.0, atol=1e-9)
+    # and the energy is k_b/2 Σ (θ - θ⁰)² elsewhere
+    e0, _ = bending_energy(x, 7.0)
+    assert e0 == pytest.approx(0.5 * 7.0 * np.sum(rest**2), rel=1e-12)
+
+
+def test_rest_angles_gradient_and_hessian_match_finite_differences():
+    rng = np.random.default_rng(5)
+    n = 10
+    wire = Wire(k_b=3, k_s=2e3, n_segments=n, plasticity=Plasticity(s=0.3, theta_p=0.2))
+    rest = rng.normal(0.0, 0.4, n - 1)
+    x = _chain_with_angles(rng.normal(0.0, 0.5, n - 1), l0=0.1)
+    f = WireEnergy(wire, 5.0, rest_angles=rest)
+    _, g = f(x)
+    h = 1e-7
+    num = np.zeros_like(x)
+    for i in range(x.shape[0]):
+        for a in range(2):
+            xp, xm = x.copy(), x.copy()
+            xp[i, a] += h
+            xm[i, a] -= h
+            num[i, a] = (f(xp)[0] - f(xm)[0]) / (2 * h)
+    np.testing.assert_allclose(g, num, rtol=1e-6, atol=1e-6 * np.abs(g).max())
+    hess = f.hessian(x, dense=True)
+    fd = np.zeros_like(hess)
+    for c in range(x.size):
+        xp, xm = x.ravel().copy(), x.ravel().copy()
+        xp[c] += 1e-6
+        xm[c] -= 1e-6
+        fd[:, c] = (f(xp.reshape(-1, 2))[1].ravel() - f(xm.reshape(-1, 2))[1].ravel()) / 2e-6
+    np.testing.assert_allclose(hess, fd, rtol=1e-5, atol=1e-5 * np.abs(hess).max())
+
+
+def test_rest_angles_are_validated():
+    wire = Wire(k_b=1, k_s=1e4, n_segments=5)
+    with pytest.raises(ValueError, match="rest_angles must have shape"):
+        WireEnergy(wire, 1.0, rest_angles=np.zeros(3))
+    with pytest.raises(ValueError, match="NaN"):
+        WireEnergy(wire, 1.0, rest_angles=np.full(4, np.nan))
+    with pytest.raises(ValueError, match="rest_angle_sd"):
+        Wire(k_b=1, k_s=1e4, rest_angle_sd=-0.1)

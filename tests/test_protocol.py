@@ -426,3 +426,27 @@ def test_powell_ramp_on_a_small_wire():
     assert all(math.isfinite(s.result.max_force) for s in result.stages)
     assert_stage_bookkeeping(result)
     assert_quasi_static_descent(result)
+
+
+def test_imperfect_wires_give_genuinely_different_replicas():
+    """A perfect wire's quasi-static path is unique up to mirror images (docs/model.md);
+    quenched rest-angle disorder makes replicas differ, reproducibly."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=40, rest_angle_sd=0.02)
+    ramp = Ramp(lambdas=(1, 30, 300, 1000))
+    a = run_replicas(wire, ramp, n_replicas=3, seed=11)
+    b = run_replicas(wire, ramp, n_replicas=3, seed=11)
+    for ra, rb in zip(a, b, strict=True):
+        assert ra.converged, ra.failed_stages
+        np.testing.assert_array_equal(ra.rest_angles, rb.rest_angles)
+        np.testing.assert_array_equal(ra.stages[-1].positions, rb.stages[-1].positions)
+    energies = [r.stages[-1].energy.total for r in a]
+    assert len(set(np.round(energies, 9))) == 3
+    assert np.std(energies) / np.mean(energies) > 1e-3
+    # the rest angles are the replica's own draw, of the requested spread
+    rest = np.concatenate([r.rest_angles for r in a])
+    assert 0.01 < rest.std() < 0.03
+
+
+def test_perfect_wire_draws_no_rest_angles():
+    r = run_ramp(Wire(k_b=5, k_s=5e5, n_segments=20), Ramp(lambdas=(1, 10)), seed=0)
+    assert r.rest_angles is None

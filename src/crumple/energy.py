@@ -79,10 +79,11 @@ def _bend_law(theta, k_b, s, theta_p):
 
 
 @njit(cache=True)
-def _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, grad, terms):
+def _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms):
     """Bending, stretching and confinement in one pass; energies by term into ``terms[:3]``.
 
     Each segment vector is computed once and reused by the two joints that share it.
+    ``rest`` holds the rest turning angle of every joint (zeros for a straight wire).
     """
     n = pos.shape[0]
     eb = 0.0
@@ -102,7 +103,7 @@ def _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, grad, terms
         grad[i + 1, 1] += c * by
         if i >= 1 and k_b != 0.0:  # joint i between segment a = i - 1 and b = i
             theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-            f, df, _ = _bend_law(theta, k_b, s, theta_p)
+            f, df, _ = _bend_law(theta - rest[i - 1], k_b, s, theta_p)
             eb += f
             gax, gay = ay / la2, -ax / la2  # dθ/da
             gbx, gby = -by / lb2, bx / lb2  # dθ/db
@@ -168,9 +169,10 @@ def _max_displacement(x, ref):
 
 
 @njit(cache=True)
-def _total_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, ks, js, width, strength, terms):
+def _total_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, ks, js, width, strength,
+              terms):  # fmt: skip
     grad = np.zeros_like(pos)
-    _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, weights, cx, cy, grad, terms)
+    _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms)
     terms[3] = _hard_core_eg(pos, ks, js, width, strength, grad)
     return terms[0] + terms[1] + terms[2] + terms[3], grad
 
@@ -208,7 +210,7 @@ def _phi_hessian(vx, vy):
 
 
 @njit(cache=True)
-def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, ks, js, width, strength,
+def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
                       project):  # fmt: skip
     n = pos.shape[0]
     size = 36 * (n - 2) + 16 * (n - 1) + 2 * n + 36 * ks.shape[0]
@@ -228,7 +230,7 @@ def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, ks, js, width
         la2 = ax * ax + ay * ay
         lb2 = bx * bx + by * by
         theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-        _, df, d2f = _bend_law(theta, k_b, s, theta_p)
+        _, df, d2f = _bend_law(theta - rest[i - 1], k_b, s, theta_p)
         gax, gay = ay / la2, -ax / la2
         gbx, gby = -by / lb2, bx / lb2
         g[0], g[1] = -gax, -gay
@@ -347,14 +349,27 @@ def _hessian_triplets(pos, k_b, s, theta_p, k_s, l0, lam, weights, ks, js, width
 # --------------------------------------------------------------------------------------------
 
 
-def _one_term(pos, index, *, k_b=0.0, s=1.0, theta_p=math.inf, k_s=0.0, l0=1.0, lam=0.0,
-              weights=None, cx=0.0, cy=0.0):  # fmt: skip
+def _one_term(pos, index, *, k_b=0.0, s=1.0, theta_p=math.inf, rest=None, k_s=0.0, l0=1.0,
+              lam=0.0, weights=None, cx=0.0, cy=0.0):  # fmt: skip
     """One elastic term through the fused kernel, the other coefficients set to zero."""
     grad = np.zeros_like(pos)
     terms = np.zeros(4)
     w = np.zeros(pos.shape[0]) if weights is None else weights
-    _elastic_eg(pos, k_b, s, theta_p, k_s, l0, lam, w, cx, cy, grad, terms)
+    rest = _rest_angles(rest, pos.shape[0])
+    _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, w, cx, cy, grad, terms)
     return float(terms[index]), grad
+
+
+def _rest_angles(rest, n_nodes: int) -> np.ndarray:
+    """Rest turning angles, shape (n_nodes - 2,): zeros when None."""
+    if rest is None:
+        return np.zeros(max(n_nodes - 2, 0))
+    r = np.ascontiguousarray(rest, dtype=np.float64)
+    if r.shape != (n_nodes - 2,):
+        raise ValueError(f"rest_angles must have shape ({n_nodes - 2},), got {r.shape}")
+    if not np.all(np.isfinite(r)):
+        raise ValueError("rest_angles contain NaN or infinite values")
+    return r
 
 
 def _plastic_args(plasticity: Plasticity | None) -> tuple[float, float]:
@@ -363,8 +378,8 @@ def _plastic_args(plasticity: Plasticity | None) -> tuple[float, float]:
     return plasticity.s, plasticity.theta_p
 
 
-def bending_energy(positions, k_b: float, plasticity: Plasticity | None = None):
-    """Bending energy Σ f(θ_i) over the N - 1 joints and its gradient (Eq. 1, Sec. III.C).
+def bending_energy(positions, k_b: float, plasticity: Plasticity | None = None, rest_angles=None):
+    """Bending energy Σ f(θ_i - θ⁰_i) over the N - 1 joints and its gradient (Eq. 1, Sec. III.C).
 
     Parameters
     ----------
@@ -373,7 +388,9 @@ def bending_energy(positions, k_b: float, plasticity: Plasticity | None = None):
     k_b : float
         Bending rigidity ``[energy]``.
     plasticity : Plasticity, optional
-        Elastic-softening law beyond θ_p.
+        Elastic-softening law beyond θ_p (applied to θ - θ⁰).
+    rest_angles : array_like, shape (n_nodes - 2,), optional
+        Rest turning angles θ⁰ ``[rad]`` of an imperfect wire; zeros by default (the paper).
 
     Returns
     -------
@@ -393,7 +410,7 @@ def bending_energy(positions, k_b: float, plasticity: Plasticity | None = None):
     """
     pos = _as_positions(positions)
     s, tp = _plastic_args(plasticity)
-    return _one_term(pos, 0, k_b=float(k_b), s=s, theta_p=tp)
+    return _one_term(pos, 0, k_b=float(k_b), s=s, theta_p=tp, rest=rest_angles)
 
 
 def stretching_energy(positions, k_s: float, rest_length: float):
@@ -543,7 +560,7 @@ class WireEnergy:
     True
     """
 
-    def __init__(self, wire: Wire, lam: float, *, skin: float | None = None):
+    def __init__(self, wire: Wire, lam: float, *, rest_angles=None, skin: float | None = None):
         if not isinstance(wire, Wire):
             raise TypeError(f"wire must be a Wire, got {type(wire).__name__}")
         lam = float(lam)
@@ -553,6 +570,7 @@ class WireEnergy:
         self.lam = lam
         self.weights = confinement_weights(wire.n_nodes, wire.confinement, wire.length)
         self._s, self._tp = _plastic_args(wire.plasticity)
+        self.rest_angles = _rest_angles(rest_angles, wire.n_nodes)
         self._terms = np.zeros(4)
         # Verlet list: candidate pairs within d + skin of a reference configuration stay valid
         # while no node has moved more than skin / 2 from it (a pair's distance changes by at
@@ -574,7 +592,8 @@ class WireEnergy:
         w = self.wire
         ks, js = self._pairs(x)
         return _total_eg(
-            x, w.k_b, self._s, self._tp, w.k_s, w.rest_length, self.lam, self.weights,
+            x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
+            self.weights,
             w.trap_center[0], w.trap_center[1], ks, js, w.hard_core, w.hard_core_energy,
             self._terms,
         )  # fmt: skip
@@ -596,8 +615,8 @@ class WireEnergy:
         x = np.ascontiguousarray(x, dtype=np.float64)
         ks, js = self._pairs(x)
         rows, cols, vals = _hessian_triplets(
-            x, w.k_b, self._s, self._tp, w.k_s, w.rest_length, self.lam, self.weights,
-            ks, js, w.hard_core, w.hard_core_energy, project_contacts,
+            x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
+            self.weights, ks, js, w.hard_core, w.hard_core_energy, project_contacts,
         )  # fmt: skip
         ndof = x.size
         if dense is None:
@@ -608,7 +627,7 @@ class WireEnergy:
         return sp.csc_matrix((vals, (rows, cols)), shape=(ndof, ndof))
 
 
-def energy_terms(wire: Wire, positions, lam: float) -> EnergyTerms:
+def energy_terms(wire: Wire, positions, lam: float, *, rest_angles=None) -> EnergyTerms:
     """Energy of a configuration by term (paper's Eq. 1).
 
     Parameters
@@ -626,7 +645,7 @@ def energy_terms(wire: Wire, positions, lam: float) -> EnergyTerms:
     >>> energy_terms(w, x, lam=2.0).to_dict()["confinement"]   # 2 (2 * 0.25 + 2 * 0.0625)
     1.25
     """
-    return WireEnergy(wire, lam).terms(positions)
+    return WireEnergy(wire, lam, rest_angles=rest_angles).terms(positions)
 
 
 def total_energy(wire: Wire, positions, lam: float):

@@ -105,6 +105,11 @@ class Wire:
         Elastic-softening law; None for a purely elastic wire.
     trap_center : tuple of float
         Centre c of the parabolic confinement ``[length]``. Default the origin.
+    rest_angle_sd : float
+        Imperfection: standard deviation ``[rad]`` of a random rest turning angle θ⁰_i at every
+        joint, so that E_b = Σ f(θ_i - θ⁰_i). Each replica of a ramp draws its own θ⁰ from
+        its seed (quenched disorder, like the residual curvature of a real wire). Default 0:
+        the paper's perfectly straight wire.
 
     Examples
     --------
@@ -126,6 +131,7 @@ class Wire:
     hard_core_energy: float = 1e-3
     plasticity: Plasticity | None = None
     trap_center: tuple[float, float] = field(default=(0.0, 0.0))
+    rest_angle_sd: float = 0.0
 
     def __post_init__(self):
         for name in ("k_b", "k_s", "length", "hard_core", "hard_core_energy"):
@@ -144,6 +150,10 @@ class Wire:
         if not (math.isfinite(cx) and math.isfinite(cy)):
             raise ValueError(f"trap_center must be finite, got {self.trap_center!r}")
         object.__setattr__(self, "trap_center", (cx, cy))
+        sd = float(self.rest_angle_sd)
+        if not (math.isfinite(sd) and sd >= 0):
+            raise ValueError(f"rest_angle_sd must be >= 0, got {self.rest_angle_sd!r}")
+        object.__setattr__(self, "rest_angle_sd", sd)
         if self.hard_core >= self.rest_length:
             raise ValueError(
                 f"hard_core width {self.hard_core} must be smaller than the segment length "

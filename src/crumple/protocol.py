@@ -98,7 +98,9 @@ class Ramp:
     ftol : float
         Equilibrium: largest node force ``[energy/length]`` at most ``ftol``. Default 1e-6.
     maxiter : int
-        Iterations per stage (Newton iterations, or Powell sweeps).
+        Iterations per stage (Newton iterations, or Powell sweeps). Default 5000: a snap-through
+        of an imperfect wire can take ~1300 Newton iterations through a region of negative
+        curvature (measured); the perfect default ramp needs at most ~350 per stage.
     max_step : float
         Largest node displacement per Newton step, in units of the segment rest length.
 
@@ -118,7 +120,7 @@ class Ramp:
     stop_tol: float | None = None
     method: Method = "newton"
     ftol: float = 1e-6
-    maxiter: int = 500
+    maxiter: int = 5000
     max_step: float = 0.5
 
     def __post_init__(self):
@@ -174,13 +176,18 @@ class Stage:
 
 @dataclass(frozen=True, slots=True)
 class RampResult:
-    """The stages of one ramp, in order, with what produced them."""
+    """The stages of one ramp, in order, with what produced them.
+
+    ``rest_angles`` is the replica's quenched rest turning angles (None for a straight wire,
+    ``wire.rest_angle_sd == 0``).
+    """
 
     wire: Wire
     ramp: Ramp
     initial: np.ndarray
     stages: tuple[Stage, ...]
     seconds: float
+    rest_angles: np.ndarray | None = None
 
     @property
     def lambdas(self) -> np.ndarray:
@@ -249,9 +256,10 @@ def minimize_wire(
     *,
     method: Method = "newton",
     ftol: float = 1e-6,
-    maxiter: int = 500,
+    maxiter: int = 5000,
     max_step: float = 0.5,
     rng: np.random.Generator | None = None,
+    rest_angles=None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -275,6 +283,8 @@ def minimize_wire(
         Newton: largest node displacement per step in units of the segment rest length.
     rng : numpy.random.Generator
         Powell's random directions (required for Powell).
+    rest_angles : array_like, shape (wire.n_nodes - 2,), optional
+        Rest turning angles of an imperfect wire (see ``Wire.rest_angle_sd``).
 
     Examples
     --------
@@ -283,7 +293,7 @@ def minimize_wire(
     >>> r.converged
     True
     """
-    energy = WireEnergy(wire, lam)
+    energy = WireEnergy(wire, lam, rest_angles=rest_angles)
     x0 = np.array(positions, dtype=np.float64)
     if x0.shape != (wire.n_nodes, 2):
         raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
@@ -365,6 +375,8 @@ def run_ramp(
 
 def _run_ramp(wire, ramp, rng, progress):
     t0 = time.perf_counter()
+    # drawn first, and only for an imperfect wire, so that perfect wires keep their streams
+    rest = rng.normal(0.0, wire.rest_angle_sd, wire.n_nodes - 2) if wire.rest_angle_sd else None
     x = initial_state(wire, ramp.initial_noise, seed=rng)
     initial = x.copy()
     stages: list[Stage] = []
@@ -382,10 +394,12 @@ def _run_ramp(wire, ramp, rng, progress):
             maxiter=ramp.maxiter,
             max_step=ramp.max_step,
             rng=rng,
+            rest_angles=rest,
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x
-        stage = Stage(lam=lam, positions=x, energy=WireEnergy(wire, lam).terms(x), result=res)
+        terms = WireEnergy(wire, lam, rest_angles=rest).terms(x)
+        stage = Stage(lam=lam, positions=x, energy=terms, result=res)
         stages.append(stage)
         if progress is not None:
             progress(i, len(ramp.lambdas), stage)
@@ -397,6 +411,7 @@ def _run_ramp(wire, ramp, rng, progress):
         initial=initial,
         stages=tuple(stages),
         seconds=time.perf_counter() - t0,
+        rest_angles=rest,
     )
 
 
