@@ -11,4 +11,13 @@ try:
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0+unknown"
 
-__all__ = ["__version__"]
+__all__ = ["__version__", "load"]
+
+
+def __getattr__(name):
+    # lazy, so that `import crumple` does not import xarray and pandas (no import-time cost)
+    if name == "load":
+        from .sweep import load
+
+        return load
+    raise AttributeError(f"module 'crumple' has no attribute {name!r}")

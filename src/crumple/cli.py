@@ -3,6 +3,8 @@
     crumple run      [--config FILE.toml] [flags]   run a confinement ramp, write HDF5 + PNG
     crumple energy   FILE --kb .. --ks .. --lam ..   energy of a configuration by term (JSON)
     crumple measure  FILE [options]                  observables of a configuration (JSON)
+    crumple sweep    CONFIG.toml --out PATH [...]    run a parameter sweep on Dask (resumable)
+    crumple status   PATH                            done / failed / missing runs of a sweep
 
 Every error is one line on stderr and a non-zero exit status, never a traceback.
 """
@@ -158,6 +160,7 @@ _WIRE_KEYS = {
     "confinement": "confinement",
     "hard_core": "hard_core",
     "hard_core_energy": "hard_core_energy",
+    "rest_angle_sd": "rest_angle_sd",
 }
 _RAMP_KEYS = ("initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step")
 
@@ -335,6 +338,92 @@ def _cmd_run(args) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# crumple sweep / status
+# --------------------------------------------------------------------------------------------
+
+
+class _SweepProgress:
+    """done / running / failed / ETA on stderr: one rewritten line on a terminal, else a line
+    every ``every`` seconds and at the end."""
+
+    def __init__(self, quiet: bool, every: float = 10.0):
+        self.quiet, self.every = quiet, every
+        self.tty = sys.stderr.isatty()
+        self.last = -math.inf
+
+    def __call__(self, p) -> None:
+        if self.quiet:
+            return
+        eta = "?" if p.eta is None else f"{p.eta:.0f} s"
+        bar = ""
+        if self.tty:
+            width = 24
+            filled = int(width * (p.done + p.failed) / max(p.total, 1))
+            bar = f"[{'#' * filled}{'.' * (width - filled)}] "
+        line = (
+            f"{bar}{p.done}/{p.total} done ({p.skipped} already), {p.running} running, "
+            f"{p.failed} failed, {p.elapsed:.0f} s elapsed, ETA {eta}"
+        )
+        finished = p.done + p.failed == p.total
+        if self.tty:
+            sys.stderr.write(f"\r{line}   " + ("\n" if finished else ""))
+        elif finished or time.monotonic() - self.last >= self.every:
+            self.last = time.monotonic()
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+
+def _cmd_sweep(args) -> int:
+    from .sweep import Sweep, run_sweep
+
+    if not Path(args.config).is_file():
+        raise CLIError(f"no such sweep file: {args.config}")
+    sweep = Sweep.from_toml(args.config)
+    if args.workers is not None and args.workers < 1:
+        raise CLIError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CLIError("--workers starts local workers; with --scheduler the cluster has its own")
+    if not args.quiet:
+        dims = ", ".join(f"{k} ({len(v)})" for k, v in sweep.dims.items()) or "one point"
+        where = f"scheduler {args.scheduler}" if args.scheduler else "a local cluster"
+        print(
+            f"crumple sweep: {len(sweep)} runs = {dims} x {sweep.replicas} replica(s), "
+            f"on {where}, into {args.out}",
+            file=sys.stderr,
+        )
+    report = run_sweep(
+        sweep, args.out, workers=args.workers, scheduler=args.scheduler,
+        progress=_SweepProgress(args.quiet),
+    )  # fmt: skip
+    print(json.dumps(report.to_dict(), indent=2))
+    return 0 if report.complete else 3
+
+
+def _cmd_status(args) -> int:
+    from .sweep import sweep_status
+
+    if not Path(args.path).is_dir():
+        raise CLIError(f"no such sweep store: {args.path}")
+    st = sweep_status(args.path)
+    if args.json:
+        print(json.dumps(st.to_dict(), indent=2))
+        return 0
+    print(
+        f"{st.path}: {st.total} runs: {len(st.done)} done, {len(st.failed)} failed, "
+        f"{len(st.corrupt)} damaged, {len(st.missing)} missing"
+        + (f" ({st.stray} run files from other sweeps)" if st.stray else "")
+    )
+    for rid, msg in st.failed.items():
+        print(f"  failed   {rid}  {msg}")
+    for rid, msg in st.corrupt.items():
+        print(f"  damaged  {rid}  {msg}")
+    if not st.complete:
+        n = st.total - len(st.done)
+        print(f"rerun the same `crumple sweep` line to compute the {n} runs not done")
+    return 0
+
+
+# --------------------------------------------------------------------------------------------
 # Parser
 # --------------------------------------------------------------------------------------------
 
@@ -370,6 +459,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", help="TOML file with [wire], [ramp], [run] tables")
     _add_model_flags(p, required=False)
     p.add_argument("--n-segments", type=int, help="number of segments N (default 100)")
+    p.add_argument("--rest-angle-sd", type=float,
+                   help="imperfection: random rest angle per joint [rad] (default 0)")  # fmt: skip
     p.add_argument("--length", type=float, help="wire length L0 (default 1)")
     p.add_argument("--lambdas", help="comma-separated λ stages (default: geometric 1…2000)")
     p.add_argument("--method", choices=["newton", "powell"], help="minimiser (default newton)")
@@ -403,6 +494,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fit-range", default="0.5,1", help="D_M fit range in R/R_G")
     p.add_argument("--contact-distance", type=float, default=1e-5, help="contact distance")
     p.set_defaults(func=_cmd_measure)
+
+    p = sub.add_parser("sweep", help="run a parameter sweep on Dask, resumably (docs/sweeps.md)")
+    p.add_argument("config", help="sweep file: [sweep], [wire], [ramp] tables, [[point]]s")
+    p.add_argument("--out", required=True, help="store directory (rerun to resume)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: cores)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("status", help="done / failed / missing runs of a sweep store")
+    p.add_argument("path", help="store directory written by crumple sweep")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_status)
     return parser
 
 

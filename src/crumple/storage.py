@@ -17,17 +17,23 @@ dataset                               shape              meaning
 ``solver/max_force``                  (R, S)             largest node force at the end
 ``solver/iterations``, ``evaluations``, ``hessian_evaluations``  (R, S)
 ``solver/message``                    (R, S)             why the minimiser stopped (UTF-8)
+``rest_angles`` (imperfect wires)     (R, n - 2)         each replica's quenched rest angles
 ====================================  =================  ======================================
 
 Root attributes: ``format`` (``"crumple-ramps"``), ``format_version``, ``wire`` and ``ramp`` (the
 parameters as JSON), ``seed`` (JSON), ``versions`` (JSON: crumple, numpy, scipy, numba, h5py),
-``created`` (ISO 8601). Files are written to a temporary name in the same directory and then
-renamed, so a crash never leaves a half-written file under the final name.
+``created`` (ISO 8601), any extra attributes given to :func:`save_ramps` (JSON; a sweep's run
+files add ``run_id``, ``replica`` and ``coords``, see :mod:`crumple.sweep`), and last
+``complete`` (true). Files are written to a temporary name in the same directory, flushed to
+disk and then renamed, so a crash never leaves a half-written file under the final name;
+:func:`verify_ramps` checks a file before it is trusted (files written before the
+``complete`` marker existed load with :func:`load_ramps` but do not pass it).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import os
 import tempfile
@@ -42,12 +48,33 @@ from .minimize import MinimizeResult
 from .model import Wire
 from .protocol import Ramp, RampResult, Stage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "load_ramps", "read_attrs", "save_ramps", "versions"]
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "atomic_write_text",
+    "load_ramps",
+    "read_arrays",
+    "read_attrs",
+    "save_ramps",
+    "verify_ramps",
+    "versions",
+]
 
 FORMAT = "crumple-ramps"
 FORMAT_VERSION = 1
 _TERMS = ("bending", "stretching", "confinement", "hard_core", "total")
 _COUNTS = ("iterations", "evaluations", "hessian_evaluations")
+_SOLVER = ("converged", "max_force", *_COUNTS, "message")
+#: Every dataset a complete file holds, with its dimensions (R replicas, S stages, n nodes).
+_LAYOUT = {
+    "lambda": ("S",),
+    "positions": ("R", "S", "n", 2),
+    "initial": ("R", "n", 2),
+    "n_stages": ("R",),
+    "seconds": ("R",),
+    **{f"energy/{t}": ("R", "S") for t in _TERMS},
+    **{f"solver/{c}": ("R", "S") for c in _SOLVER},
+}
 
 
 def versions() -> dict[str, str]:
@@ -142,24 +169,154 @@ def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None
             for c, v in counts.items():
                 g.create_dataset(c, data=v)
             g.create_dataset("message", data=msgs, dtype=h5py.string_dtype("utf-8"))
-        os.replace(tmp, path)
+            rest = [getattr(r, "rest_angles", None) for r in results]
+            if any(a is not None for a in rest):
+                ra = np.full((n_rep, n_node - 2), np.nan)
+                for r, a in enumerate(rest):
+                    if a is not None:
+                        ra[r] = a
+                f.create_dataset("rest_angles", data=ra)
+            f.attrs["complete"] = True  # last: only a file written to the end carries it
+        _fsync(tmp)
+        _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
 
 
+def _fsync(path) -> None:
+    """Flush a file's data to the disk, so that a rename never publishes unwritten blocks."""
+    with open(path, "rb+") as fh:
+        os.fsync(fh.fileno())
+
+
+@functools.cache
+def _umask() -> int:
+    mask = os.umask(0o022)  # read it (there is no other portable way) and put it back
+    os.umask(mask)
+    return mask
+
+
+def _publish(tmp, path) -> None:
+    """Give a temporary file (mkstemp makes it 0600) the usual permissions, then rename it."""
+    os.chmod(tmp, 0o666 & ~_umask())
+    os.replace(tmp, path)
+
+
+def atomic_write_text(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically: temporary file, fsync, rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        _publish(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _decode_attrs(attrs) -> dict:
+    out = {}
+    for k, v in attrs.items():
+        v = v.decode() if isinstance(v, bytes) else v
+        try:
+            out[k] = json.loads(v) if isinstance(v, str) else v
+        except json.JSONDecodeError:
+            out[k] = v
+    return out
+
+
+def _check_layout(f, path) -> None:
+    """Every dataset of :data:`_LAYOUT` present, with consistent shapes; ValueError if not."""
+    sizes: dict[str, int] = {}
+    for name, dims in _LAYOUT.items():
+        obj = f.get(name)
+        if not isinstance(obj, h5py.Dataset):
+            raise ValueError(f"{path}: dataset {name!r} is missing")
+        if len(obj.shape) != len(dims):
+            raise ValueError(f"{path}: dataset {name!r} has shape {obj.shape}")
+        for dim, size in zip(dims, obj.shape, strict=True):
+            if isinstance(dim, int):
+                ok = size == dim
+            else:
+                ok = sizes.setdefault(dim, size) == size
+            if not ok:
+                raise ValueError(f"{path}: dataset {name!r} has inconsistent shape {obj.shape}")
+
+
+def verify_ramps(path, *, run_id: str | None = None, read_data: bool = False) -> dict:
+    """Check that ``path`` is a complete crumple ramp file before trusting it.
+
+    A file fails when it cannot be opened as HDF5 (truncated, garbage), is not a
+    ``crumple-ramps`` file, lacks the ``complete`` marker written last by :func:`save_ramps`,
+    lacks a dataset or has inconsistent shapes, holds another run than ``run_id``, or (with
+    ``read_data``) has a dataset that cannot be read back.
+
+    Returns
+    -------
+    dict
+        The root attributes, JSON-decoded.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and what is wrong with it.
+    """
+    path = Path(path)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise ValueError(f"{path} is not a readable HDF5 file ({exc})") from None
+    try:
+        with f:
+            attrs = _decode_attrs(f.attrs)
+            if attrs.get("format") != FORMAT:
+                raise ValueError(f"{path} is not a crumple ramp file")
+            complete = attrs.get("complete")
+            if not (isinstance(complete, bool | np.bool_) and complete):
+                raise ValueError(f"{path} is incomplete (no 'complete' marker)")
+            if run_id is not None and attrs.get("run_id") != run_id:
+                raise ValueError(f"{path} holds run {attrs.get('run_id')!r}, not {run_id!r}")
+            _check_layout(f, path)
+            if read_data:
+                for name in _LAYOUT:
+                    f[name][()]
+    except (OSError, KeyError, RuntimeError) as exc:  # h5py's errors on damaged contents
+        raise ValueError(f"{path} is damaged ({exc})") from None
+    return attrs
+
+
+def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> dict:
+    """The arrays of a verified ramp file, as a dict of NumPy arrays, without building objects.
+
+    Keys: ``lambda`` (S,), ``n_stages``, ``seconds`` (R,), ``energy/<term>`` and
+    ``solver/<field>`` (R, S) (``solver/message`` as str), ``positions`` (R, S, n, 2) when
+    asked for, and ``attrs`` (the root attributes, JSON-decoded). Raises ``ValueError`` for a
+    file :func:`verify_ramps` rejects or whose data cannot be read: never returns partial data.
+    """
+    attrs = verify_ramps(path, run_id=run_id)
+    out: dict = {"attrs": attrs}
+    try:
+        with h5py.File(path, "r") as f:
+            for name in _LAYOUT:
+                if name == "positions" and not positions:
+                    continue
+                ds = f[name]
+                out[name] = ds.asstr()[()] if name == "solver/message" else ds[()]
+    except (OSError, KeyError, RuntimeError) as exc:
+        raise ValueError(f"{path} is damaged ({exc})") from None
+    return out
+
+
 def read_attrs(path) -> dict:
     """The root attributes of a results file, JSON-decoded where they are JSON."""
     with h5py.File(path, "r") as f:
-        out = {}
-        for k, v in f.attrs.items():
-            v = v.decode() if isinstance(v, bytes) else v
-            try:
-                out[k] = json.loads(v) if isinstance(v, str) else v
-            except json.JSONDecodeError:
-                out[k] = v
-        return out
+        return _decode_attrs(f.attrs)
 
 
 def load_ramps(path) -> list[RampResult]:
@@ -188,6 +345,7 @@ def load_ramps(path) -> list[RampResult]:
         fmax = solver["max_force"][()]
         counts = {c: solver[c][()] for c in _COUNTS}
         msgs = solver["message"].asstr()[()]
+        rest = f["rest_angles"][()] if "rest_angles" in f else None
     out = []
     for r in range(pos.shape[0]):
         stages = []
@@ -206,6 +364,9 @@ def load_ramps(path) -> list[RampResult]:
                 method=ramp.method,
             )
             stages.append(Stage(lam=float(lams[s]), positions=pos[r, s], energy=terms, result=res))
+        extra = {}
+        if rest is not None and "rest_angles" in RampResult.__dataclass_fields__:
+            extra["rest_angles"] = None if np.isnan(rest[r]).all() else rest[r]
         out.append(
             RampResult(
                 wire=wire,
@@ -213,6 +374,7 @@ def load_ramps(path) -> list[RampResult]:
                 initial=initial[r],
                 stages=tuple(stages),
                 seconds=float(seconds[r]),
+                **extra,
             )
         )
     return out
