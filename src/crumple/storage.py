@@ -32,6 +32,7 @@ disk and then renamed, so a crash never leaves a half-written file under the fin
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import functools
 import json
@@ -140,9 +141,7 @@ def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None
             for c in _COUNTS:
                 counts[c][r, s] = getattr(st.result, c)
             msgs[r, s] = st.result.message
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    os.close(fd)
-    try:
+    with _atomic(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = FORMAT
             f.attrs["format_version"] = FORMAT_VERSION
@@ -177,11 +176,6 @@ def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None
                         ra[r] = a
                 f.create_dataset("rest_angles", data=ra)
             f.attrs["complete"] = True  # last: only a file written to the end carries it
-        _fsync(tmp)
-        _publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return path
 
 
@@ -204,19 +198,26 @@ def _publish(tmp, path) -> None:
     os.replace(tmp, path)
 
 
-def atomic_write_text(path, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically: temporary file, fsync, rename."""
-    path = Path(path)
+@contextlib.contextmanager
+def _atomic(path: Path):
+    """Yield a temporary name beside ``path``; when the block succeeds, flush that file to disk
+    and rename it to ``path``; when it fails, delete it. Readers never see a partial file."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    os.close(fd)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
+        yield tmp
+        _fsync(tmp)
         _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def atomic_write_text(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically: temporary file, fsync, rename."""
+    path = Path(path)
+    with _atomic(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
     return path
 
 

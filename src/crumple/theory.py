@@ -93,6 +93,15 @@ def loop_size(k_b, lam, *, segment_length=None):
     return _out(np.asarray(ell))
 
 
+def _gamma_x(k_b, k_s, lam, L0):
+    """x = sqrt(k_b λ) / (k_s L0), the variable of the γ formula, from validated inputs."""
+    kb = _positive("k_b", k_b)
+    ks = _positive("k_s", k_s)
+    lm = _positive("lam", lam)
+    l0 = _positive("L0", L0)
+    return np.sqrt(kb * lm) / (ks * l0)
+
+
 def gamma_prediction(k_b, k_s, lam, L0=1.0):
     """The paper's prediction for γ = E_s/E_b (Sec. III.B, Eq. 5).
 
@@ -134,11 +143,7 @@ def gamma_prediction(k_b, k_s, lam, L0=1.0):
     >>> gamma_prediction(1.0, 1.0, 4.0)          # x = 2: outside the domain
     nan
     """
-    kb = _positive("k_b", k_b)
-    ks = _positive("k_s", k_s)
-    lm = _positive("lam", lam)
-    l0 = _positive("L0", L0)
-    x = np.sqrt(kb * lm) / (ks * l0)
+    x = _gamma_x(k_b, k_s, lam, L0)
     with np.errstate(divide="ignore", invalid="ignore"):
         gamma = np.where(x < 1.0, x / (1.0 - x), np.nan)
     return _out(gamma)
@@ -174,11 +179,7 @@ def gamma_exponents(k_b, k_s, lam, L0=1.0) -> dict:
     >>> gamma_exponents(1e-6, 1.0, 1e-6)         # x = 1e-6: the small-x limit
     {'lam': 0.5000005000005, 'k_b': 0.5000005000005, 'k_s': -1.000001000001}
     """
-    kb = _positive("k_b", k_b)
-    ks = _positive("k_s", k_s)
-    lm = _positive("lam", lam)
-    l0 = _positive("L0", L0)
-    x = np.sqrt(kb * lm) / (ks * l0)
+    x = _gamma_x(k_b, k_s, lam, L0)
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(x < 1.0, 1.0 / (1.0 - x), np.nan)
     return {"lam": _out(0.5 * slope), "k_b": _out(0.5 * slope), "k_s": _out(-slope)}
