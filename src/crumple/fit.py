@@ -75,6 +75,13 @@ class PowerLawFit:
         Number of replicas (bootstrap fits only).
     n_boot : int or None
         Number of bootstrap resamples (bootstrap fits only).
+
+    Examples
+    --------
+    >>> x = np.array([1.0, 2.0, 4.0, 8.0])
+    >>> r = fit_power_law(x, 3 * x**0.5)
+    >>> round(r.exponent, 12), round(r.prefactor, 12), r.fit_range, r.n_points
+    (0.5, 3.0, (1.0, 8.0), 4)
     """
 
     exponent: float
@@ -139,6 +146,12 @@ class MeanEstimate:
         ``"t"`` (Student-t interval) or ``"bootstrap"`` (percentile bootstrap).
     samples : tuple of float
         The samples themselves.
+
+    Examples
+    --------
+    >>> m = mean_confidence_interval([1.0, 2.0, 3.0])
+    >>> m.value, m.n_samples, m.method
+    (2.0, 3, 't')
     """
 
     value: float
@@ -172,6 +185,14 @@ class MultiPowerLawFit:
         Root-mean-square residual of ``ln y``.
     confidence : float
         Level of ``ci``.
+
+    Examples
+    --------
+    >>> lam = np.array([1.0, 2.0, 4.0, 1.0, 2.0, 4.0])
+    >>> kb = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+    >>> r = fit_multi_power_law(2 * lam**0.5 * kb**2, lam=lam, k_b=kb)
+    >>> {k: round(v, 9) for k, v in r.exponents.items()}, r.ranges["lam"]
+    ({'lam': 0.5, 'k_b': 2.0}, (1.0, 4.0))
     """
 
     exponents: Mapping[str, float]
@@ -220,6 +241,13 @@ class CollapseFit:
         Power law fitted to all rescaled points in ``x_range`` (the paper's R_g ~ λ^α line).
     rescaled : mapping of key to (ndarray, ndarray)
         Each curve's ``(x, y * (g_ref / g)**c)`` restricted to the points used.
+
+    Examples
+    --------
+    >>> lam = np.geomspace(1, 100, 8)
+    >>> curves = {g: (lam, lam**-0.25 * g**1.2) for g in (1.0, 2.0, 4.0)}
+    >>> round(collapse(curves, reference=1.0).exponent, 9)
+    1.2
     """
 
     exponent: float
