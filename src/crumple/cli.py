@@ -235,8 +235,8 @@ def _build_run(args):
 class _Progress:
     """Progress on stderr: a rewritten line on a terminal, a few lines otherwise."""
 
-    def __init__(self, n_replicas: int, n_stages: int, quiet: bool):
-        self.n_rep, self.n_stages, self.quiet = n_replicas, n_stages, quiet
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
         self.tty = sys.stderr.isatty()
         self.t0 = time.perf_counter()
 
@@ -289,7 +289,7 @@ def _cmd_run(args) -> int:
             f"on {workers} worker(s), minimiser {ramp.method}",
             file=sys.stderr,
         )
-    prog = _Progress(n_rep, len(ramp.lambdas), quiet)
+    prog = _Progress(quiet)
     t0 = time.perf_counter()
     if n_rep == 1:
         from .protocol import replica_seeds

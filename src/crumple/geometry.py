@@ -646,7 +646,7 @@ def _max_safe_fraction(pos, step):
                         pos[j + 1, 0], pos[j + 1, 1], step[j + 1, 0], step[j + 1, 1],
                     )  # fmt: skip
                     tmin = min(tmin, t)
-    return min(tmin, 1.0) if tmin <= 1.0 else 1.0
+    return min(tmin, 1.0)
 
 
 def max_safe_fraction(positions, step) -> float:

@@ -245,13 +245,13 @@ def newton(
         it += 1
         h = hess(x)
         nhev += 1
-        # the median, not the largest, diagonal entry sets the shift's scale: a few very stiff
-        # rows (contacts) must not make the shift swamp the soft modes
-        scale = _diag_scale(h, np.median)
         solve = _factor(h, 0.0)
         if solve is not None:
             mu = 0.0
         else:
+            # the median, not the largest, diagonal entry sets the shift's scale: a few very
+            # stiff rows (contacts) must not make the shift swamp the soft modes
+            scale = _diag_scale(h, np.median)
             if hess_fallback is not None:
                 h = hess_fallback(x)
                 nhev += 1
