@@ -346,8 +346,8 @@ class _SweepProgress:
     """done / running / failed / ETA on stderr: one rewritten line on a terminal, else a line
     every ``every`` seconds and at the end."""
 
-    def __init__(self, quiet: bool, every: float = 10.0):
-        self.quiet, self.every = quiet, every
+    def __init__(self, quiet: bool, every: float = 10.0, prefix: str = ""):
+        self.quiet, self.every, self.prefix = quiet, every, prefix
         self.tty = sys.stderr.isatty()
         self.last = -math.inf
 
@@ -361,8 +361,8 @@ class _SweepProgress:
             filled = int(width * (p.done + p.failed) / max(p.total, 1))
             bar = f"[{'#' * filled}{'.' * (width - filled)}] "
         line = (
-            f"{bar}{p.done}/{p.total} done ({p.skipped} already), {p.running} running, "
-            f"{p.failed} failed, {p.elapsed:.0f} s elapsed, ETA {eta}"
+            f"{self.prefix}{bar}{p.done}/{p.total} done ({p.skipped} already), "
+            f"{p.running} running, {p.failed} failed, {p.elapsed:.0f} s elapsed, ETA {eta}"
         )
         finished = p.done + p.failed == p.total
         if self.tty:
@@ -421,6 +421,65 @@ def _cmd_status(args) -> int:
         n = st.total - len(st.done)
         print(f"rerun the same `crumple sweep` line to compute the {n} runs not done")
     return 0
+
+
+# --------------------------------------------------------------------------------------------
+# crumple reproduce / figures
+# --------------------------------------------------------------------------------------------
+
+
+def _finish_report(out, quiet: bool, summary: dict | None = None) -> int:
+    from .reproduce import write_report
+
+    def log(msg):
+        if not quiet:
+            print(f"crumple: {msg}", file=sys.stderr)
+
+    t0 = time.perf_counter()
+    res = write_report(out, log=log)
+    res["report_seconds"] = round(time.perf_counter() - t0, 1)
+    if summary is not None:
+        res["simulation"] = summary
+    print(json.dumps(res, indent=2))
+    failed = summary is not None and any(e["failed"] for e in summary["experiments"].values())
+    if res["missing"]:
+        print(f"crumple: error: the report is incomplete: {', '.join(res['missing'])}",
+              file=sys.stderr)  # fmt: skip
+    elif not quiet:
+        print(f"crumple: report written: {res['report']}", file=sys.stderr)
+    return 3 if res["missing"] or failed else 0
+
+
+def _cmd_reproduce(args) -> int:
+    from .paper import PROFILES, build_sweeps
+    from .reproduce import run
+
+    profile = "quick" if args.quick else args.profile
+    if profile not in PROFILES:
+        raise CLIError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
+    if args.workers is not None and args.workers < 1:
+        raise CLIError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CLIError("--workers starts local workers; with --scheduler the cluster has its own")
+    out = args.out or ("crumple-report-quick" if profile == "quick" else "crumple-report")
+    if not args.quiet:
+        n = sum(len(s) for s in build_sweeps(profile).values())
+        print(f"crumple reproduce: profile {profile}, {n} ramps, into {out} (resumable: rerun "
+              "the same line to continue)", file=sys.stderr)  # fmt: skip
+    bars: dict[str, _SweepProgress] = {}
+
+    def cb(name, p):
+        bars.setdefault(name, _SweepProgress(args.quiet, prefix=f"{name:>8s}: "))(p)
+
+    summary = run(out, profile, workers=args.workers, scheduler=args.scheduler,
+                  progress=None if args.quiet else cb)  # fmt: skip
+    return _finish_report(out, args.quiet, summary)
+
+
+def _cmd_figures(args) -> int:
+    if not Path(args.path).is_dir():
+        raise CLIError(f"no such reproduction directory: {args.path}")
+    return _finish_report(args.path, args.quiet)
 
 
 # --------------------------------------------------------------------------------------------
@@ -502,6 +561,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("reproduce", help="reproduce the paper: every figure and number, "
+                       "side by side with the paper's (report.html)")  # fmt: skip
+    p.add_argument(
+        "--quick", action="store_true", help="every figure and row, fewer replicas and stages"
+    )
+    p.add_argument("--profile", default="full", help="full (default), quick or smoke")
+    p.add_argument("--out", help="output directory (default crumple-report[-quick])")
+    p.add_argument("--workers", type=int, help="local worker processes (default: cores)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_cmd_reproduce)
+
+    p = sub.add_parser("figures", help="redraw the figures and report of `crumple reproduce` "
+                       "from its stored results (no simulation)")  # fmt: skip
+    p.add_argument("path", help="directory written by crumple reproduce")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=_cmd_figures)
 
     p = sub.add_parser("status", help="done / failed / missing runs of a sweep store")
     p.add_argument("path", help="store directory written by crumple sweep")

@@ -65,6 +65,7 @@ __all__ = [
     "SweepReport",
     "SweepStatus",
     "canonical_json",
+    "connect",
     "execute_run",
     "load",
     "run_id",
@@ -1001,6 +1002,29 @@ def _connect(client, scheduler, workers, n_todo, quiet_logs):
         )
     with cluster, Client(cluster) as c:
         yield c
+
+
+def connect(
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    max_workers: int | None = None,
+    quiet_logs: bool = True,
+):
+    """A Dask client to pass to several :func:`run_sweep` calls (one cluster for all).
+
+    With ``scheduler``: a client of that scheduler. Otherwise a ``LocalCluster`` of
+    ``workers`` single-threaded worker processes (default one per core, at most
+    ``max_workers``), shut down when the ``with`` block ends::
+
+        with connect(workers=2) as client:
+            run_sweep(sweep_a, "a", client=client)
+            run_sweep(sweep_b, "b", client=client)
+    """
+    if workers is not None and scheduler is not None:
+        raise ValueError("workers starts a local cluster; with a scheduler it is unused")
+    n = max_workers if max_workers is not None else 1 << 30
+    return _connect(None, scheduler, workers, max(1, int(n)), quiet_logs)
 
 
 @contextlib.contextmanager

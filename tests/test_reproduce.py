@@ -1,0 +1,205 @@
+"""crumple reproduce: the experiments as data, the verdict arithmetic, the report's completeness.
+
+The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 9 stages) once
+for the module and checks that every figure file and every table row of the report exists.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from crumple import paper
+from crumple.cli import main
+from crumple.reproduce import (
+    FIGURES,
+    Estimate,
+    _combine,
+    _pool,
+    _row,
+    check_report,
+    loop_comparison,
+    run,
+    write_report,
+)
+from crumple.theory import loop_shape
+
+# ---- the experiments as data -----------------------------------------------------------------
+
+
+def test_every_paper_value_has_a_source_and_a_number():
+    assert len(paper.PAPER_VALUES) >= 13
+    for key, v in paper.PAPER_VALUES.items():
+        assert v.key == key
+        assert math.isfinite(v.value)
+        assert v.source and ("Fig." in v.source or "Sec." in v.source)
+
+
+@pytest.mark.parametrize("name", list(paper.PROFILES))
+def test_profiles_build_every_experiment(name):
+    sweeps = paper.build_sweeps(name)
+    assert set(sweeps) == set(paper.EXPERIMENTS)
+    prof = paper.PROFILES[name]
+    el = sweeps["elastic"]
+    assert el.replicas == prof.replicas
+    pts = {(w.k_b, w.k_s) for w in (r.wire for r in el.runs())}
+    for k in paper.FIG3_POINTS + paper.FIG4A_POINTS + paper.FIG4B_POINTS:
+        assert k in pts
+    for r in el.runs():  # the paper's Fig. 2 stages are always in the schedule
+        assert set(paper.PAPER_LAMBDAS) <= set(r.ramp.lambdas)
+        assert r.wire.confinement == "per-length" and r.ramp.method == "newton"
+    assert {r.wire.confinement for r in sweeps["per_node"].runs()} == {"per-node"}
+    assert {r.ramp.method for r in sweeps["powell"].runs()} == {"powell"}
+    s_vals = {r.wire.plasticity.s for r in sweeps["plastic"].runs()}
+    assert s_vals == set(paper.PLASTIC_S)
+
+
+def test_full_profile_has_the_papers_ten_replicas():
+    full = paper.build_sweeps("full")
+    assert full["elastic"].replicas == 10
+    assert full["plastic"].replicas == 10
+
+
+def test_unknown_profile_is_a_clear_error():
+    with pytest.raises(ValueError, match="unknown profile 'fast'"):
+        paper.build_sweeps("fast")
+
+
+# ---- the arithmetic of a row -------------------------------------------------------------------
+
+
+def test_combine_adds_replica_spread_and_fit_error_in_quadrature():
+    e = _combine([1.0, 3.0], [0.3, 0.4])
+    assert e.value == 2.0
+    sem = np.std([1.0, 3.0], ddof=1) / math.sqrt(2)
+    assert e.sigma == pytest.approx(math.hypot(sem, math.sqrt((0.09 + 0.16) / 2)))
+    # identical replicas: the fit error alone
+    assert _combine([2.0, 2.0], [0.1, 0.1]).sigma == pytest.approx(0.1)
+    assert _combine([], []).n == 0
+
+
+def test_pool_over_points():
+    p = _pool([Estimate(1.0, 0.1, 3), Estimate(2.0, 0.1, 3)])
+    assert p.value == 1.5
+    assert p.sigma == pytest.approx(math.sqrt((0.5 + 0.01) / 2))
+
+
+@pytest.mark.parametrize(
+    ("value", "sigma", "verdict"),
+    [(1.33, 0.01, "agrees"), (1.5, 0.1, "agrees"), (1.6, 0.1, "differs"), (1.0, 0.0, "differs")],
+)
+def test_verdict_is_two_sigma(value, sigma, verdict):
+    row = _row("D_M", Estimate(value, sigma, 10, (0.5, 1.0)), "10")
+    assert row["verdict"].startswith(verdict)
+    assert row["paper"] == 1.33 and row["fit_range"] == [0.5, 1.0]
+
+
+# ---- the loop-shape measure --------------------------------------------------------------------
+
+
+def _rotate(xy, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return xy @ np.array([[c, s], [-s, c]])
+
+
+def test_loop_comparison_recognises_a_lemniscate_lobe():
+    x, y = loop_shape(1.0, 1.0, n_points=81)
+    lobe = _rotate(np.c_[x, y], 0.7) + np.array([0.2, -0.1])  # anywhere, any orientation
+    res = loop_comparison(lobe)
+    assert res["rms_lemniscate"] < 0.02
+    assert res["rms_circle"] > 0.1
+
+
+def test_loop_comparison_recognises_a_circle():
+    t = np.linspace(0, 2 * np.pi, 121)
+    circle = np.c_[np.sin(t), 1 - np.cos(t)]  # a circle through the origin, closed there
+    res = loop_comparison(circle)
+    assert res["rms_circle"] < 0.02
+    assert res["rms_lemniscate"] > 0.1
+
+
+# ---- end to end: the smoke profile ------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    out = tmp_path_factory.mktemp("repro")
+    summary = run(out, "smoke", workers=2)
+    report = write_report(out)
+    return out, summary, report
+
+
+def test_smoke_report_is_complete(smoke):
+    out, summary, report = smoke
+    assert report["missing"] == []
+    assert check_report(out) == []
+    assert all(e["failed"] == 0 for e in summary["experiments"].values())
+    for stem in FIGURES:
+        for ext in ("png", "svg"):
+            assert (out / "figures" / f"{stem}.{ext}").stat().st_size > 1000
+    res = json.loads((out / "results.json").read_text())
+    assert {r["key"] for r in res["rows"]} == set(paper.PAPER_VALUES)
+    for r in res["rows"]:
+        assert r["verdict"] and r["replicas"]
+    md = (out / "report.md").read_text()
+    assert "SMOKE PROFILE" in md
+    html = (out / "report.html").read_text()
+    assert html.count("data:image/png;base64,") == len(FIGURES)
+    assert "src='figures/" not in html  # self-contained
+
+
+def test_smoke_report_states_non_convergence(smoke):
+    out, _, _ = smoke
+    res = json.loads((out / "results.json").read_text())
+    pw = res["extra"]["convergence"]["powell"]
+    assert pw["stages"] > 0
+    md = (out / "report.md").read_text()
+    assert f"powell: {pw['runs_done']}/{pw['runs']} runs, {pw['stages_converged']}/" in md
+
+
+def test_rerun_is_resumed_and_figures_do_not_simulate(smoke, capsys):
+    out, _, _ = smoke
+    stamps = {p: p.stat().st_mtime_ns for p in (out / "data").rglob("*.h5")}
+    again = run(out, "smoke", workers=1)
+    assert all(e["computed"] == 0 for e in again["experiments"].values())
+    (out / "report.html").unlink()
+    assert main(["figures", str(out), "--quiet"]) == 0
+    assert (out / "report.html").is_file()
+    assert {p: p.stat().st_mtime_ns for p in (out / "data").rglob("*.h5")} == stamps
+    assert json.loads(capsys.readouterr().out)["missing"] == []
+
+
+def test_a_store_keeps_its_profile(smoke):
+    out, _, _ = smoke
+    with pytest.raises(ValueError, match="holds the 'smoke' profile"):
+        run(out, "quick")
+
+
+def test_figures_of_nothing_is_a_one_line_error(tmp_path, capsys):
+    assert main(["figures", str(tmp_path / "nope")]) == 2
+    assert "no such reproduction directory" in capsys.readouterr().err
+    assert main(["figures", str(tmp_path)]) == 2
+    assert "holds no reproduction" in capsys.readouterr().err
+
+
+def test_reproduce_rejects_bad_options(capsys):
+    assert main(["reproduce", "--profile", "fast"]) == 2
+    assert "unknown profile" in capsys.readouterr().err
+    assert main(["reproduce", "--quick", "--workers", "0"]) == 2
+
+
+def test_check_report_names_what_is_missing(smoke, tmp_path):
+    out, _, _ = smoke
+    assert "report.md" in check_report(tmp_path)
+    victim = out / "figures" / "fig4_gamma.svg"
+    data = victim.read_bytes()
+    victim.unlink()
+    try:
+        assert check_report(out) == ["figures/fig4_gamma.svg"]
+    finally:
+        victim.write_bytes(data)
+    assert os.path.getsize(victim) > 0
