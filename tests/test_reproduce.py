@@ -203,3 +203,28 @@ def test_check_report_names_what_is_missing(smoke, tmp_path):
     finally:
         victim.write_bytes(data)
     assert os.path.getsize(victim) > 0
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "verdict"),
+    [(0.3, 0.2, "consistent"), (0.2, 0.3, "not consistent"), (0.25, 0.24, "inconclusive")],
+)
+def test_trend_verdict_needs_two_sigma(a, b, verdict):
+    from crumple.reproduce import _trend, _trend_verdict
+
+    d = _trend(Estimate(-a, 0.03, 10), Estimate(-b, 0.03, 10))  # signs do not matter: |α|
+    assert d.value == pytest.approx(a - b)
+    assert d.sigma == pytest.approx(math.hypot(0.03, 0.03))
+    assert _trend_verdict(d).startswith(verdict)
+
+
+def test_kink_ratio_sees_a_kink_anywhere():
+    from crumple.reproduce import _kink_ratio
+
+    t = np.linspace(0, np.pi, 60)
+    arc = np.c_[np.cos(t), np.sin(t)]
+    assert _kink_ratio(arc) == pytest.approx(1.0, abs=0.05)
+    kinked = arc.copy()
+    kinked[40:] = kinked[40:] @ np.array([[0.0, 1.0], [-1.0, 0.0]])  # a 90° corner at node 40
+    kinked[40:] += kinked[39] - kinked[40] + (kinked[39] - kinked[38])
+    assert _kink_ratio(kinked) > 5

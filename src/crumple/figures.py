@@ -96,7 +96,8 @@ _PAPER_STYLE = {"color": "tab:red", "ls": ":", "lw": 1.2}
 
 
 def _panel_letter(ax, k: int) -> None:
-    ax.text(0.02, 0.97, f"({'abcdefgh'[k]})", transform=ax.transAxes, va="top", fontsize=9)
+    # above the axes' top left corner: never on the data
+    ax.text(0.0, 1.02, f"({'abcdefgh'[k]})", transform=ax.transAxes, va="bottom", fontsize=9)
 
 
 def _loglog_curves(ax, curves, *, marker="o", errors=None):
@@ -189,7 +190,14 @@ def plot_gamma(
         _loglog_curves(ax, curves)
         if theory:
             for i, (_, (x, y)) in enumerate(theory.items()):
-                ax.plot(x, y, "--", color=f"C{i}", lw=0.8)
+                ax.plot(
+                    x,
+                    y,
+                    "--",
+                    color=f"C{i}",
+                    lw=0.8,
+                    label="paper's closed form" if i == 0 else None,
+                )
         if fit_range is not None and xl == "λ":
             ax.axvspan(*fit_range, color="0.92", zorder=0)
         ax.set_xlabel(xl)
@@ -221,7 +229,8 @@ def plot_radius(
     _loglog_curves(c, collapsed, marker=".")
     if master is not None:
         x = np.geomspace(*fit_range, 20)
-        c.plot(x, master[0] * x ** master[1], "k--", lw=1.5, label=f"fit: λ^{master[1]:.3f}")
+        what = master[2] if len(master) > 2 else "fit"
+        c.plot(x, master[0] * x ** master[1], "k--", lw=1.5, label=f"{what}: λ^{master[1]:.3f}")
     c.set_xlabel("λ")
     c.set_ylabel(collapse_label or "rescaled R_g")
     c.legend(fontsize=6)
@@ -246,6 +255,8 @@ def plot_plasticity(curves, inset, *, fit_range, paper_inset=None) -> Figure:
     if paper_inset is not None:
         b.axhline(paper_inset, label=f"paper's saturation {paper_inset}", **_PAPER_STYLE)
     b.set_xscale("log")
+    b.set_xticks(t, [f"{v:g}" for v in t])
+    b.minorticks_off()
     b.set_xlabel("θ_p [rad]  (s = 0.4)")
     b.set_ylabel("|α|")
     b.legend(fontsize=7)
@@ -254,7 +265,7 @@ def plot_plasticity(curves, inset, *, fit_range, paper_inset=None) -> Figure:
     return fig
 
 
-def plot_loop_shape(loops, configuration=None, neck=None) -> Figure:
+def plot_loop_shape(loops, configuration=None, neck=None, title=None) -> Figure:
     """Sec. III.A: loops in the lobe's coordinates (r/r_max against θ) with
     ``sqrt(sin 2θ)``; ``loops = [(θ, r/r_max, label)]``; optionally the wire with its loop."""
     fig = Figure(figsize=(10, 4.2), layout="constrained")
@@ -285,6 +296,8 @@ def plot_loop_shape(loops, configuration=None, neck=None) -> Figure:
             b.legend(fontsize=7)
         b.plot(0, 0, "+", color="tab:gray")
         b.set_aspect("equal", adjustable="datalim")
+        if title:
+            b.set_title(title, fontsize=9)
     else:
         b.set_visible(False)
     _panel_letter(b, 1)
@@ -309,6 +322,7 @@ def plot_alternatives(groups) -> Figure:
             ax.legend(fontsize=6)
         ax.set_yticks(y, [it[0] for it in items], fontsize=6)
         ax.set_title(quantity, fontsize=8)
+        ax.set_xlabel("value (bars: ±2σ)", fontsize=7)
         ax.tick_params(axis="x", labelsize=7)
         ax.invert_yaxis()
         _panel_letter(ax, k)
