@@ -321,4 +321,3 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
             seed=SEED,
         ),
     }
-

@@ -40,7 +40,7 @@ import numpy as np
 
 from . import paper
 from .fit import collapse, fit_multi_power_law, fit_power_law
-from .geometry import close_segment_pairs, turning_angles
+from .geometry import close_segment_pairs, segment_lengths, turning_angles
 from .observables import mass_size_exponent, mass_within, r_max, radius_of_gyration
 from .storage import atomic_write_text, versions
 from .theory import gamma_exponents, gamma_prediction, loop_size
@@ -73,6 +73,8 @@ FIGURES = {
 #: A contact: two non-adjacent segments closer than this many hard-core widths.
 CONTACT_FACTOR = 2.0
 LAM_FIG3 = 1000.0
+#: Contacts "between loops": both segments at least this fraction of the wire from its ends.
+END_FRACTION = 0.1
 #: Largest rms deviation of r/r_max from the lemniscate lobe still called a match.
 LOOP_RMS = 0.05
 #: A wire whose joints all turn by less than this [rad] is straight (γ undefined).
@@ -95,8 +97,9 @@ def run(
 ) -> dict:
     """Run (or resume) every experiment of ``profile`` into ``out/data``; return a summary.
 
-    Experiments run one after the other on one Dask cluster (Powell's long runs first).
-    Runs already in the stores are not recomputed. ``progress(experiment, Progress)`` is
+    All experiments are submitted at once to one Dask cluster (a local one, or
+    ``scheduler``'s), so long Powell runs overlap the short ones. Runs already in the stores
+    are not recomputed. ``progress(experiment, Progress)`` is
     called as runs finish.
     """
     from .sweep import connect, run_sweep
@@ -236,11 +239,11 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
                 rg[p, r, j] = radius_of_gyration(x)
                 pairs, _ = close_segment_pairs(x, CONTACT_FACTOR * s.hard_core)
                 contacts[p, r, j] = pairs.shape[0]
-                m = max(1, (x.shape[0] - 1) // 10)  # END_FRACTION of the segments
+                m = max(1, int(END_FRACTION * (x.shape[0] - 1)))
                 far = (pairs.min(axis=1) >= m) & (pairs.max(axis=1) < x.shape[0] - 1 - m)
                 interior[p, r, j] = int(far.sum())
                 max_angle[p, r, j] = np.abs(turning_angles(x)).max()
-                length[p, r, j] = np.linalg.norm(np.diff(x, axis=0), axis=1).sum()
+                length[p, r, j] = segment_lengths(x).sum()
     s.obs.update(
         r_max=rm,
         rms=rg,
@@ -452,12 +455,14 @@ class Analysis:
     extra: dict
 
     def to_json(self) -> dict:
+        """The numbers of the report (``results.json``); keys of ``extra`` starting with ``_``
+        hold arrays for the figures only."""
         return {
             "profile": self.profile,
             "rows": self.rows,
             "alternatives": self.alternatives,
             "claims": self.claims,
-            "extra": _jsonable(self.extra),
+            "extra": _jsonable({k: v for k, v in self.extra.items() if not k.startswith("_")}),
         }
 
 
@@ -1729,7 +1734,6 @@ def write_report(out, *, log: Callable[[str], None] | None = None) -> dict:
             _jsonable(
                 {
                     **an.to_json(),
-                    "extra": {k: v for k, v in an.extra.items() if not k.startswith("_")},
                     "versions": meta.get("versions", {}),
                 }
             ),
