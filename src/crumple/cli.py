@@ -504,6 +504,13 @@ def _add_model_flags(p, required: bool):
     p.add_argument("--plastic-theta", type=float, help="yield angle θ_p [rad]")
 
 
+def _add_cluster_flags(p) -> None:
+    """Where the runs go (a local cluster or a scheduler) and whether to show progress."""
+    p.add_argument("--workers", type=int, help="local worker processes (default: cores)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -557,9 +564,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("sweep", help="run a parameter sweep on Dask, resumably (docs/sweeps.md)")
     p.add_argument("config", help="sweep file: [sweep], [wire], [ramp] tables, [[point]]s")
     p.add_argument("--out", required=True, help="store directory (rerun to resume)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: cores)")
-    p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
+    _add_cluster_flags(p)
     p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("reproduce", help="reproduce the paper: every figure and number, "
@@ -569,9 +574,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--profile", default="full", help="full (default), quick or smoke")
     p.add_argument("--out", help="output directory (default crumple-report[-quick])")
-    p.add_argument("--workers", type=int, help="local worker processes (default: cores)")
-    p.add_argument("--scheduler", help="address of a running Dask scheduler, tcp://host:8786")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
+    _add_cluster_flags(p)
     p.set_defaults(func=_cmd_reproduce)
 
     p = sub.add_parser("figures", help="redraw the figures and report of `crumple reproduce` "
