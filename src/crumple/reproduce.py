@@ -726,15 +726,6 @@ def analyse(out) -> Analysis:
         "residual_rms": mfit.residual_rms,
         "n_points": mfit.n_points,
     }
-    # per-curve ε_l of Fig. 4a/4b
-    extra["eps_l_curves"] = {}
-    for k in paper.FIG4A_POINTS + paper.FIG4B_POINTS:
-        p = el.index(k)
-        yy = g_mean[p, gsel]
-        fin = np.isfinite(yy) & (yy > 0)
-        if fin.sum() >= 3:
-            fk = fit_power_law(el.lam[gsel][fin], yy[fin])
-            extra["eps_l_curves"][f"{k[0]:g}, {k[1]:g}"] = [fk.exponent, fk.stderr]
 
     # ---- Fig. 5: α and the collapse ------------------------------------------------------
     alpha_points = {tuple(el.keys[p]): _alpha(el, p) for p in fig3}
