@@ -1,7 +1,12 @@
 """crumple reproduce: the experiments as data, the verdict arithmetic, the report's completeness.
 
 The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 9 stages) once
-for the module and checks that every figure file and every table row of the report exists.
+for the module and checks that every figure file and every table row of the report exists, and
+that its ``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
+number (exact equality: a refactor must not move a bit). When a change to the physics moves the
+numbers on purpose, regenerate the golden file and say why in the commit::
+
+    CRUMPLE_UPDATE_GOLDEN=1 python -m pytest tests/test_reproduce.py -k golden
 """
 
 from __future__ import annotations
@@ -9,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -124,6 +130,10 @@ def test_loop_comparison_recognises_a_circle():
 
 # ---- end to end: the smoke profile ------------------------------------------------------------
 
+GOLDEN = Path(__file__).parent / "data" / "smoke_results.json"
+#: Keys of results.json that may change without the physics changing (package versions).
+VOLATILE = ("versions",)
+
 
 @pytest.fixture(scope="module")
 def smoke(tmp_path_factory):
@@ -228,3 +238,22 @@ def test_kink_ratio_sees_a_kink_anywhere():
     kinked[40:] = kinked[40:] @ np.array([[0.0, 1.0], [-1.0, 0.0]])  # a 90° corner at node 40
     kinked[40:] += kinked[39] - kinked[40] + (kinked[39] - kinked[38])
     assert _kink_ratio(kinked) > 5
+
+
+def _golden_view(results: dict) -> dict:
+    """results.json without what may change between machines and versions."""
+    return {k: v for k, v in results.items() if k not in VOLATILE}
+
+
+def test_smoke_results_match_the_golden_file(smoke):
+    """Every number of the smoke report, bit for bit (results.json writes NaN as null, and
+    JSON floats round-trip exactly, so == is exact equality). See the module docstring to
+    regenerate."""
+    out, _, _ = smoke
+    got = _golden_view(json.loads((out / "results.json").read_text()))
+    if os.environ.get("CRUMPLE_UPDATE_GOLDEN"):
+        GOLDEN.parent.mkdir(exist_ok=True)
+        GOLDEN.write_text(json.dumps(got, indent=1, sort_keys=True, ensure_ascii=False) + "\n")
+    want = json.loads(GOLDEN.read_text())
+    for key in sorted(set(want) | set(got)):
+        assert got.get(key) == want.get(key), f"results.json[{key!r}] differs from {GOLDEN.name}"
