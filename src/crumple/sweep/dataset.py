@@ -1,0 +1,157 @@
+"""Reading a sweep store into an :class:`xarray.Dataset` (:func:`load`, also ``crumple.load``).
+
+Named ``dataset`` rather than ``load`` so that the module does not shadow the function
+``crumple.sweep.load``.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..storage import read_arrays
+from .store import _h5, _read_manifest
+
+_TERMS = ("bending", "stretching", "confinement", "hard_core", "total")
+_COUNTS = ("iterations", "evaluations", "hessian_evaluations")
+
+
+class IncompleteSweepWarning(UserWarning):
+    """:func:`load` found runs that are missing, failed or damaged (their values are NaN)."""
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+# --------------------------------------------------------------------------------------------
+
+
+def load(path, *, positions: bool = False):
+    """The stage-level results of a sweep store as an :class:`xarray.Dataset`.
+
+    Dimensions: one per swept parameter (the grid, in the order of the sweep file; points as
+    one dimension, named after its key or ``point`` with one coordinate per key), then
+    ``replica`` and ``lam`` (every stage λ of any run; NaN where a run has no such stage).
+    Data variables over all of them: ``E_bending``, ``E_stretching``, ``E_confinement``,
+    ``E_hard_core``, ``E_total`` ``[energy]``, ``gamma`` (E_s/E_b), ``converged`` (bool),
+    ``max_force`` ``[energy/length]``, ``iterations``, ``evaluations``,
+    ``hessian_evaluations`` (float, NaN where no stage); per run (no ``lam``): ``done``,
+    ``seconds``, ``n_stages``, ``run_id``. With ``positions=True``, ``positions`` (…,
+    ``replica``, ``lam``, ``node``, ``xy``) ``[length]``, NaN-padded when N is swept.
+
+    Runs that are missing, failed or whose file is damaged are NaN (``done`` false) and an
+    :class:`IncompleteSweepWarning` says how many; a damaged file is never read as data.
+    See ``docs/sweeps.md``.
+    """
+    import pandas as pd
+    import xarray as xr
+
+    out = Path(path)
+    m = _read_manifest(out)
+    lam = np.asarray(m["lambdas"], dtype=float)
+    coords: dict[str, Any] = {}
+    shape: list[int] = []
+    names: list[str] = []
+    for d in m["dims"]:
+        if "levels" in d:
+            mi = pd.MultiIndex.from_tuples([tuple(v) for v in d["values"]], names=d["levels"])
+            coords.update(xr.Coordinates.from_pandas_multiindex(mi, d["name"]))
+        else:
+            coords[d["name"]] = d["values"]
+        names.append(d["name"])
+        shape.append(len(d["values"]))
+    n_rep = int(m["replicas"])
+    run_shape = (*shape, n_rep)
+    stage_shape = (*run_shape, len(lam))
+    data, per_run, pos_arrays, bad = _read_runs(out, m, lam, run_shape, positions)
+    done, seconds, n_stages, ids = per_run
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eb, es = data["E_bending"], data["E_stretching"]
+        data["gamma"] = np.where(eb > 0, es / np.where(eb > 0, eb, 1.0), np.nan)
+    sdims = (*names, "replica", "lam")
+    rdims = (*names, "replica")
+    variables = {k: (sdims, v) for k, v in data.items()}
+    variables.update(
+        done=(rdims, done),
+        seconds=(rdims, seconds),
+        n_stages=(rdims, n_stages),
+        run_id=(rdims, ids.astype(str)),
+    )
+    if positions:
+        n_max = max((p.shape[-2] for _, p in pos_arrays.values()), default=0)
+        pos = np.full((*stage_shape, n_max, 2), np.nan)
+        for at, (j, p) in pos_arrays.items():
+            pos[(*at, j, slice(0, p.shape[-2]))] = p
+        variables["positions"] = ((*sdims, "node", "xy"), pos)
+        coords["xy"] = ["x", "y"]
+    coords["replica"] = np.arange(n_rep)
+    coords["lam"] = lam
+    ds = xr.Dataset(variables, coords=coords)
+    ds["gamma"].attrs["long_name"] = "E_stretching / E_bending"
+    ds["lam"].attrs["long_name"] = "trap strength λ of the stage"
+    ds.attrs.update(
+        store=str(out),
+        sweep=json.dumps(m["sweep"]),
+        runs=len(m["runs"]),
+        runs_done=int(done.sum()),
+    )
+    if bad:
+        warnings.warn(
+            f"{out}: {bad} of {len(m['runs'])} runs are missing, failed or damaged; their values "
+            "are NaN (done = False); see `crumple status`",
+            IncompleteSweepWarning,
+            stacklevel=2,
+        )
+    return ds
+
+
+def _read_runs(out: Path, m: dict, lam: np.ndarray, run_shape: tuple, positions: bool):
+    """Every run file of the manifest ``m`` into arrays over (*run_shape, lam); the runs that
+    are missing, damaged or on other stages than ``lam`` are counted in ``bad`` and left NaN."""
+    stage_shape = (*run_shape, len(lam))
+    data = {f"E_{t}": np.full(stage_shape, np.nan) for t in _TERMS}
+    data["converged"] = np.zeros(stage_shape, dtype=bool)
+    data["max_force"] = np.full(stage_shape, np.nan)
+    for c in _COUNTS:
+        data[c] = np.full(stage_shape, np.nan)
+    done = np.zeros(run_shape, dtype=bool)
+    seconds = np.full(run_shape, np.nan)
+    n_stages = np.zeros(run_shape, dtype=np.int64)
+    ids = np.full(run_shape, "", dtype=object)
+    pos_arrays: dict[tuple, np.ndarray] = {}
+    bad = 0
+    for entry in m["runs"]:
+        rid = entry["id"]
+        at = (*entry["index"], entry["replica"])
+        ids[at] = rid
+        h5 = _h5(out, rid)
+        if not h5.exists():
+            bad += 1
+            continue
+        try:
+            a = read_arrays(h5, positions=positions, run_id=rid)
+        except ValueError:
+            bad += 1
+            continue
+        j = np.searchsorted(lam, a["lambda"])
+        if np.any(j >= len(lam)) or not np.array_equal(
+            lam[np.minimum(j, len(lam) - 1)], a["lambda"]
+        ):
+            bad += 1
+            continue
+        for t in _TERMS:
+            data[f"E_{t}"][(*at, j)] = a[f"energy/{t}"][0]
+        data["max_force"][(*at, j)] = a["solver/max_force"][0]
+        ran = np.arange(len(j)) < int(a["n_stages"][0])
+        data["converged"][(*at, j)] = a["solver/converged"][0] & ran
+        for c in _COUNTS:
+            data[c][(*at, j)] = np.where(ran, a[f"solver/{c}"][0], np.nan)
+        done[at] = True
+        seconds[at] = a["seconds"][0]
+        n_stages[at] = a["n_stages"][0]
+        if positions:
+            pos_arrays[at] = (j, a["positions"][0])
+    return data, (done, seconds, n_stages, ids), pos_arrays, bad
