@@ -1,0 +1,98 @@
+"""Measuring: every section's record from the stores in ``DIR/data`` (no simulation).
+
+:func:`analyse` reads each experiment the sections name once (:func:`.series._series`), then
+measures the sections in registry order, each from the series it ``READS`` and the records it
+``NEEDS``, and gathers the records into an :class:`Analysis`.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from . import registry
+from .common import Context, Record, _jsonable
+from .series import Series, _convergence, _series
+
+__all__ = ["PROFILE_FILE", "Analysis", "analyse"]
+
+PROFILE_FILE = "profile.json"
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Analysis:
+    """Everything the report shows: the series, and each section's record (in order)."""
+
+    profile: dict
+    series: dict[str, Series]
+    sections: tuple[Any, ...]
+    records: dict[str, Record]
+
+    def _gather(self, what: str) -> list:
+        return [x for s in self.sections for x in getattr(self.records[s.NAME], what)]
+
+    @property
+    def rows(self) -> list[dict]:
+        """The main table's rows, section by section."""
+        return self._gather("rows")
+
+    @property
+    def alternatives(self) -> list[dict]:
+        return self._gather("alternatives")
+
+    @property
+    def claims(self) -> list[dict]:
+        return self._gather("claims")
+
+    @property
+    def extra(self) -> dict:
+        """Convergence of every experiment and every section's ``extra``."""
+        out: dict[str, Any] = {"convergence": {k: _convergence(v) for k, v in self.series.items()}}
+        for s in self.sections:
+            for k, v in self.records[s.NAME].extra.items():
+                if k in out:
+                    raise ValueError(f"section {s.NAME!r} writes extra[{k!r}] a second time")
+                out[k] = v
+        return out
+
+    def to_json(self) -> dict:
+        """The numbers of the report (``results.json``)."""
+        return {
+            "profile": self.profile,
+            "rows": self.rows,
+            "alternatives": self.alternatives,
+            "claims": self.claims,
+            "extra": _jsonable(self.extra),
+        }
+
+
+def _read_profile(out: Path) -> dict:
+    path = out / PROFILE_FILE
+    if not path.exists():
+        raise ValueError(
+            f"{out} holds no reproduction ({PROFILE_FILE} missing); run `crumple reproduce "
+            f"--out {out}` first"
+        )
+    return json.loads(path.read_text())
+
+
+def analyse(out, *, sections=None) -> Analysis:
+    """Measure every section (default: :func:`.registry.sections`) from ``out/data``."""
+    out = Path(out)
+    prof = _read_profile(out)["profile"]
+    secs = registry.sections() if sections is None else tuple(sections)
+    series = {e.name: _series(out / "data" / e.name, e.levels) for e in registry.experiments(secs)}
+    records: dict[str, Record] = {}
+    for s in secs:
+        missing = [n for n in s.NEEDS if n not in records]
+        if missing:
+            raise ValueError(f"section {s.NAME!r} needs {', '.join(missing)}, measured after it")
+        ctx = Context(
+            profile=prof,
+            series={e.name: series[e.name] for e in s.READS},
+            records={n: records[n] for n in s.NEEDS},
+        )
+        records[s.NAME] = s.measure(ctx)
+    return Analysis(profile=prof, series=series, sections=secs, records=records)

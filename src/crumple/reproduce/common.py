@@ -1,0 +1,239 @@
+"""What every section of the report shares: estimates with uncertainties, their arithmetic,
+the record a section measures into, and the table entries built from it.
+
+Conventions of every number (stated in the report too):
+
+* an exponent is fitted per replica (:func:`crumple.fit.fit_power_law`, or
+  :func:`crumple.observables.mass_size_exponent`); the value is the replica mean and its
+  uncertainty σ combines in quadrature the standard error of that mean and the rms of the
+  per-replica regression errors (a perfect wire's replicas are near copies, docs/model.md, so
+  the replica spread alone would understate the error of a fit): :func:`_combine`;
+* a value pooled over parameter points (the paper's "universal" D_M and α) is the mean over the
+  points, σ² = (between-point variance + mean σ_p²) / n_points: :func:`_pool`;
+* the verdict is "agrees" when ``|ours - paper| <= 2σ``, else "differs": :func:`_row`;
+* non-converged stages are counted and reported, never dropped silently.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import paper
+from ..fit import fit_power_law
+
+if TYPE_CHECKING:
+    from .series import Series
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Record:
+    """What one section measured: its table entries and the numbers behind its figures.
+
+    ``rows`` (one per paper value, :func:`_row`), ``alternatives`` (:func:`_alt`) and
+    ``claims`` go into the report's tables in the registry's order; ``extra`` into
+    ``results.json`` (``extra``); ``detail`` holds what only the section's figures and
+    discussion read (arrays, configurations), never written to ``results.json``.
+    """
+
+    rows: tuple[dict, ...] = ()
+    alternatives: tuple[dict, ...] = ()
+    claims: tuple[dict, ...] = ()
+    extra: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    detail: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Context:
+    """What a section's ``measure`` reads: the profile, the stage-level results of the
+    experiments it names (``READS``) and the records of the sections it names (``NEEDS``)."""
+
+    profile: Mapping[str, Any]
+    series: Mapping[str, Series]
+    records: Mapping[str, Record]
+
+    @property
+    def replicas(self) -> int:
+        """Replicas of the main experiments (the profile's ``replicas``)."""
+        return self.profile["replicas"]
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A replica-averaged value with its uncertainty (module docstring)."""
+
+    value: float
+    sigma: float
+    n: int
+    fit_range: tuple[float, float] | None = None
+    spread: float = 0.0  # standard deviation over replicas (or points)
+
+    def to_dict(self) -> dict:
+        return {
+            "value": _f(self.value),
+            "sigma": _f(self.sigma),
+            "n": self.n,
+            "fit_range": None if self.fit_range is None else [_f(v) for v in self.fit_range],
+            "spread": _f(self.spread),
+        }
+
+
+def _f(v):
+    return None if v is None or not np.isfinite(v) else float(v)
+
+
+def _combine(values, stderrs, fit_range=None) -> Estimate:
+    v = np.asarray(values, float)
+    e = np.asarray(stderrs, float)
+    ok = np.isfinite(v) & np.isfinite(e)
+    v, e = v[ok], e[ok]
+    n = int(v.size)
+    if n == 0:
+        return Estimate(math.nan, math.nan, 0, fit_range)
+    sd = float(v.std(ddof=1)) if n > 1 else 0.0
+    sigma = math.hypot(sd / math.sqrt(n), float(np.sqrt(np.mean(e**2))))
+    return Estimate(float(v.mean()), sigma, n, fit_range, sd)
+
+
+def _pool(estimates: list[Estimate], fit_range=None) -> Estimate:
+    """Mean over points; σ² = (between-point variance + mean σ_p²) / n (conservative: the
+    between-point variance already holds part of the per-point noise). ``fit_range`` default:
+    the union of the points' ranges."""
+    ests = [e for e in estimates if e.n > 0 and np.isfinite(e.value)]
+    n = len(ests)
+    if fit_range is None:
+        rs = [e.fit_range for e in ests if e.fit_range is not None]
+        fit_range = (min(r[0] for r in rs), max(r[1] for r in rs)) if rs else None
+    if n == 0:
+        return Estimate(math.nan, math.nan, 0, fit_range)
+    v = np.array([e.value for e in ests])
+    s = np.array([e.sigma for e in ests])
+    between = float(v.var(ddof=1)) if n > 1 else 0.0
+    sigma = math.sqrt((between + float(np.mean(s**2))) / n)
+    return Estimate(float(v.mean()), sigma, n, fit_range, math.sqrt(between))
+
+
+def _fit_replicas(x, y) -> Estimate:
+    """Power law of ``y[r]`` against ``x`` for each replica ``r`` (finite, positive points,
+    at least 3), combined as in :func:`_combine`."""
+    x = np.asarray(x, float)
+    vals, errs, lo, hi = [], [], math.inf, -math.inf
+    for yr in np.atleast_2d(np.asarray(y, float)):
+        ok = np.isfinite(yr) & (yr > 0)
+        if ok.sum() < 3:
+            continue
+        f = fit_power_law(x[ok], yr[ok])
+        vals.append(f.exponent)
+        errs.append(f.stderr)
+        lo, hi = min(lo, f.fit_range[0]), max(hi, f.fit_range[1])
+    return _combine(vals, errs, (lo, hi) if vals else None)
+
+
+def _trend(a: Estimate, b: Estimate) -> Estimate:
+    """|a| - |b| with the two uncertainties added in quadrature."""
+    return Estimate(abs(a.value) - abs(b.value), math.hypot(a.sigma, b.sigma), min(a.n, b.n))
+
+
+def _trend_verdict(d: Estimate) -> str:
+    if d.value > 2 * d.sigma:
+        return "consistent"
+    if d.value < -2 * d.sigma:
+        return "not consistent"
+    return "inconclusive (within 2σ of no trend)"
+
+
+def _linear_slope(x, y) -> tuple[float, float]:
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if x.size < 3:
+        return math.nan, math.nan
+    A = np.c_[np.ones_like(x), x]
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ coef
+    s2 = float(res @ res) / (x.size - 2)
+    cov = s2 * np.linalg.inv(A.T @ A)
+    return float(coef[1]), float(math.sqrt(cov[1, 1]))
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, Estimate):
+        return obj.to_dict()
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, float | np.floating):
+        return _f(float(obj))
+    if isinstance(obj, np.integer | np.bool_):
+        return obj.item()
+    return obj
+
+
+def _row(
+    key: str,
+    est: Estimate,
+    replicas: str,
+    note: str = "",
+    *,
+    reference: paper.PaperValue | None = None,
+) -> dict:
+    """A row of the report's main table: ``est`` against the paper's value ``key`` (or against
+    ``reference``, a value that is not the paper's, e.g. a closed form)."""
+    pv = paper.PAPER_VALUES[key] if reference is None else reference
+    ok = np.isfinite(est.value) and np.isfinite(est.sigma)
+    dev = abs(est.value - pv.value) / est.sigma if ok and est.sigma > 0 else math.inf
+    if not ok:
+        verdict = "not measured"
+    elif abs(est.value - pv.value) <= 2 * est.sigma:
+        verdict = "agrees (within 2σ)"
+    else:
+        verdict = "differs"
+    return {
+        "key": key,
+        "quantity": pv.quantity,
+        "paper": pv.value,
+        "source": pv.source,
+        "ours": _f(est.value),
+        "sigma": _f(est.sigma),
+        "deviation_sigma": _f(dev) if math.isfinite(dev) else None,
+        "fit_range": None if est.fit_range is None else [_f(v) for v in est.fit_range],
+        "replicas": replicas,
+        "verdict": verdict,
+        "note": note,
+    }
+
+
+def _alt(quantity: str, variant: str, est: Estimate, replicas: int | str, paper_value=None):
+    return {
+        "quantity": quantity,
+        "variant": variant,
+        "value": _f(est.value),
+        "sigma": _f(est.sigma),
+        "fit_range": None if est.fit_range is None else [_f(v) for v in est.fit_range],
+        "replicas": replicas,
+        "paper": paper_value,
+    }
+
+
+def _num(v, sig=None) -> str:
+    if v is None:
+        return "—"
+    if sig is None or not np.isfinite(sig) or sig == 0:
+        return f"{v:.4g}"
+    if v != 0 and sig < 1e-4 * abs(v):
+        return f"{v:.4g} ± {sig:.1g}"
+    digits = max(0, 1 - math.floor(math.log10(abs(sig))))
+    return f"{v:.{digits}f} ± {sig:.{digits}f}"
+
+
+def _range(r, half_open: bool = False) -> str:
+    if not r:
+        return "—"
+    return f"({r[0]:.4g}, {r[1]:.4g}]" if half_open else f"[{r[0]:.4g}, {r[1]:.4g}]"

@@ -1,0 +1,149 @@
+"""The report's structure: an :class:`~.analysis.Analysis` -> a list of blocks for
+:mod:`.render`.
+
+Header and conventions, the runs (with each experiment's and section's notes), the main table
+with the discussion of each row, the claims, the alternatives and the figures, all gathered
+from the sections in registry order. Nothing here names a figure or a paper value.
+"""
+
+from __future__ import annotations
+
+from . import registry
+from .analysis import Analysis
+from .common import _num, _range
+
+__all__ = ["blocks"]
+
+_CONVENTIONS = (
+    "Conventions: each exponent is fitted per replica; the value is the replica "
+    "mean and σ combines the standard error of the mean and the rms regression "
+    "error in quadrature (the replicas of a perfect wire at equilibrium are "
+    "near copies, docs/model.md). Values pooled over (k_b, k_s) points: the "
+    "mean over points, σ² = (between-point variance + mean σ²)/n. Verdict: "
+    "agrees when |ours − paper| ≤ 2σ. Confinement λ r² per unit length, Newton "
+    "to max force ≤ 1e-6 at every stage, unless a row says otherwise; R_G = "
+    "r_max (the paper's reading, Sec. III.C); M(R) exact (fractional segments)."
+)
+_ALTERNATIVES = (
+    "Where the paper leaves a choice open, each alternative that matters, at "
+    "the same parameters (not picked to match). A D_M shown as — could not be "
+    "fitted: M(R) = 0 somewhere in the fit range (a hollow configuration, no "
+    "wire near the centre of mass; the per-node wire coils into a ring)."
+)
+
+
+def _head(an: Analysis, meta: dict) -> list[tuple]:
+    prof = an.profile
+    b: list[tuple] = [
+        ("h1", "crumple: reproduction of Lin, Lin & Hong, Crumpling wires in two dimensions")
+    ]
+    if prof["name"] != "full":
+        b.append(("warn", prof["description"]))
+    b.append(
+        (
+            "p",
+            f"Profile **{prof['name']}**: {prof['description']}. crumple "
+            f"{meta['versions'].get('crumple', '?')}. Every parameter comes from the "
+            "paper or is stated as ours in `crumple.paper` (with the reason); nothing "
+            "was tuned to match.",
+        )
+    )
+    b.append(("p", _CONVENTIONS))
+    return b
+
+
+def _runs(an: Analysis) -> list[tuple]:
+    lines = []
+    for name, c in an.extra["convergence"].items():
+        lines.append(
+            f"{name}: {c['runs_done']}/{c['runs']} runs, {c['stages_converged']}/"
+            f"{c['stages']} stages at equilibrium"
+            + (f" — {'; '.join(c['incomplete'])}" if c["incomplete"] else "")
+        )
+    b: list[tuple] = [("h2", "Runs"), ("list", lines)]
+    for e in registry.experiments(an.sections):
+        if e.note is not None:
+            b.append(("p", e.note(an.profile)))
+    for s in an.sections:
+        if hasattr(s, "notes"):
+            b += [("p", text) for text in s.notes(an.records[s.NAME])]
+    return b
+
+
+def _discussion(an: Analysis) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for s in an.sections:
+        if hasattr(s, "discuss"):
+            out.update(s.discuss(an.records[s.NAME], an.records))
+    return out
+
+
+def _table(an: Analysis) -> list[tuple]:
+    head = ["quantity", "paper", "ours", "fit range", "replicas", "verdict"]
+    body = [
+        [
+            r["quantity"],
+            f"{r['paper']:g}",
+            _num(r["ours"], r["sigma"]),
+            _range(r["fit_range"], r.get("bracket", False)),
+            r["replicas"],
+            r["verdict"],
+        ]
+        for r in an.rows
+    ]
+    disc = _discussion(an)
+    items = []
+    said: dict[str, str] = {}
+    for r in an.rows:
+        text = (
+            f"**{r['quantity']}** — {r['verdict']}. {r['note']}."
+            if r["note"]
+            else f"**{r['quantity']}** — {r['verdict']}."
+        )
+        text += f" Source: {r['source']}."
+        if r["key"] in disc:
+            d = disc[r["key"]]
+            text += f" (Discussion as for: {said[d]}.)" if d in said else " " + d
+            said.setdefault(d, r["quantity"])
+        items.append(text)
+    return [
+        ("h2", "The paper's numbers"),
+        ("table", head, body),
+        ("h3", "Discussion of each row"),
+        ("list", items),
+    ]
+
+
+def _claims_and_alternatives(an: Analysis) -> list[tuple]:
+    claims = [[c["claim"], c["measured"], c["criterion"], c["verdict"]] for c in an.claims]
+    alts = [
+        [
+            a["quantity"],
+            a["variant"],
+            _num(a["value"], a["sigma"]),
+            _range(a["fit_range"]),
+            str(a["replicas"]),
+            "—" if a["paper"] is None else f"{a['paper']:g}",
+        ]
+        for a in an.alternatives
+    ]
+    return [
+        ("h2", "The paper's claims"),
+        ("table", ["claim", "measured", "criterion", "verdict"], claims),
+        ("h2", "Open choices side by side"),
+        ("p", _ALTERNATIVES),
+        ("table", ["quantity", "variant", "value", "fit range", "replicas", "paper"], alts),
+    ]
+
+
+def blocks(an: Analysis, meta: dict) -> list[tuple]:
+    """The whole report as blocks (:mod:`.render`); ``meta`` is ``profile.json``."""
+    figs = [("fig", stem, cap) for stem, cap in registry.figures(an.sections).items()]
+    return [
+        *_head(an, meta),
+        *_runs(an),
+        *_table(an),
+        *_claims_and_alternatives(an),
+        ("h2", "Figures"),
+        *figs,
+    ]

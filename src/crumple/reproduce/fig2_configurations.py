@@ -1,0 +1,231 @@
+"""Fig. 2: the configurations at λ = 70, 200, 300, 1000, and what its caption says of them.
+
+Runs: ``elastic`` at :data:`crumple.paper.FIG2`, and the ``per_node`` and ``powell`` wires
+beside it. Measures: the onset of contacts between loops (the bracket of stages), the first
+contact, contacts against λ, the sharpest kink, the number of turning points and γ at
+(5, 5e5). Says: row ``lambda_contact`` and three claims.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from .. import paper
+from ..geometry import close_segment_pairs, turning_angles
+from .common import Context, Estimate, Record, _row
+from .experiments import ELASTIC, PER_NODE, POWELL
+from .series import CONTACT_FACTOR, Series
+
+NAME = "fig2_configurations"
+READS = (ELASTIC, PER_NODE, POWELL)
+NEEDS: tuple[str, ...] = ()
+VALUES = (paper.PAPER_VALUES["lambda_contact"],)
+FIGURES = {"fig2_configurations": "Fig. 2: configurations at λ = 70, 200, 300, 1000"}
+
+
+def _count_inflections(x, rel: float = 0.02) -> int:
+    th = turning_angles(x)
+    big = th[np.abs(th) > rel * np.abs(th).max()]
+    return int(np.sum(np.sign(big[1:]) != np.sign(big[:-1])))
+
+
+def _kink_ratio(x) -> float:
+    """Largest |θ_i| / max(|θ_{i-1}|, |θ_{i+1}|) over the joints that turn by at least a
+    quarter of the largest turn (near an inflection every ratio is noise): about 1 on a smooth
+    wire, >> 1 at a kink."""
+    th = np.abs(turning_angles(x))
+    mid, nb = th[1:-1], np.maximum(th[:-2], th[2:])
+    big = mid >= 0.25 * th.max()
+    if not big.any():
+        return 1.0
+    return float(np.max(mid[big] / np.maximum(nb[big], 1e-12)))
+
+
+def _onset(lam, counts) -> list[tuple[float, float]]:
+    """(last stage without, first stage with) a contact, per replica; NaN stages skipped."""
+    out = []
+    for r in range(counts.shape[0]):
+        fin = np.flatnonzero(np.isfinite(counts[r]))
+        hit = fin[counts[r, fin] > 0]
+        if hit.size:
+            before = fin[fin < hit[0]]
+            out.append((float(lam[before[-1]]) if before.size else 0.0, float(lam[hit[0]])))
+    return out
+
+
+def _contact_row(first, first_any, nrep: int) -> dict:
+    any_txt = (
+        f"; the first contact of any kind (the wire's ends closing the first loop) is at "
+        f"λ = {np.median([b for _, b in first_any]):g}"
+        if first_any
+        else ""
+    )
+    if not first:
+        row = _row(
+            "lambda_contact",
+            Estimate(math.inf, math.nan, 0),
+            str(nrep),
+            "no interior contact at any stage up to the last" + any_txt,
+        )
+        row["ours"], row["verdict"] = None, "differs (no contact)"
+        return row
+    lo_c = min(a for a, _ in first)
+    hi_c = max(b for _, b in first)
+    val = float(np.median([b for _, b in first]))
+    row = _row(
+        "lambda_contact",
+        Estimate(val, math.nan, len(first), (lo_c, hi_c)),
+        str(nrep),
+        "first stage where two segments at least a tenth of the wire away from both ends "
+        f"are closer than {CONTACT_FACTOR:g} hard-core widths (median over replicas); the "
+        f"onset lies between stages, in ({lo_c:g}, {hi_c:g}] (the 'fit range' column)" + any_txt,
+    )
+    row["bracket"] = True
+    inside = lo_c < 1000.0 <= hi_c
+    row["verdict"] = "agrees (1000 in the bracket)" if inside else "differs"
+    row["deviation_sigma"] = None
+    return row
+
+
+def _shape_claims(wires: dict[str, tuple[Series, int]]) -> list[dict]:
+    """No sharp edge, and more turning points as λ grows (the caption's two sentences)."""
+    infl, kinks = {}, {}
+    for name, (s, p) in wires.items():
+        infl[name] = [
+            _count_inflections(s.positions[p, 0, s.j(lm)]) if s.valid(p, 0, s.j(lm)) else None
+            for lm in paper.PAPER_LAMBDAS
+        ]
+        kinks[name] = max(
+            _kink_ratio(s.positions[p, r, s.j(lm)])
+            for r in range(s.replicas)
+            for lm in paper.PAPER_LAMBDAS
+            if s.valid(p, r, s.j(lm))
+        )
+    nl = infl["Newton, per length"]
+    ok_infl = all(v is not None for v in nl) and all(b >= a for a, b in itertools.pairwise(nl))
+    return [
+        {
+            "claim": "no sharp edge: the wire stays smooth as λ grows",
+            "source": "Fig. 2 caption: 'no sharp edge occurs and the shape of CW remains smooth'",
+            "measured": "largest |θ_i| / max(|θ_i-1|, |θ_i+1|) over the Fig. 2 stages: "
+            + ", ".join(f"{k}: {v:.2f}" for k, v in kinks.items()),
+            "criterion": "smooth if no joint turns more than twice as much as both its neighbours "
+            "(ratio <= 2); judged on the per-length Newton wire",
+            "verdict": "consistent" if kinks["Newton, per length"] <= 2 else "not consistent",
+        },
+        {
+            "claim": "more turning points as λ grows",
+            "source": "Fig. 2 caption: 'More turning points are formed if the external field "
+            "increases'",
+            "measured": "inflection points (sign changes of θ) at λ = 70, 200, 300, 1000: "
+            + "; ".join(f"{k}: {v}" for k, v in infl.items()),
+            "criterion": "non-decreasing on the per-length Newton wire (replica 0)",
+            "verdict": "consistent" if ok_infl else "not consistent",
+        },
+    ]
+
+
+def _stretching_claim(el: Series, fig2: int) -> dict:
+    kb = np.array([k[0] for k in el.keys])
+    ks = np.array([k[1] for k in el.keys])
+    g2 = np.nanmean(el.obs["gamma"][fig2, :, el.j(1000.0)])
+    return {
+        "claim": "stretching energy is insignificant when k_b << k_s",
+        "source": "Sec. III.A: 'the stretching energy is found to be insignificant when "
+        "k_b << k_s'",
+        "measured": f"γ = E_s/E_b = {g2:.3g} at (5, 5e5), λ = 1000; largest γ over all points "
+        f"with k_s/k_b >= 1e4 at λ = 1000: "
+        f"{np.nanmax(el.obs['gamma'][(ks / kb) >= 1e4][:, :, el.j(1000.0)]):.3g}",
+        "criterion": "γ < 0.1",
+        "verdict": "consistent" if g2 < 0.1 else "not consistent",
+    }
+
+
+def _configurations(wires: dict[str, tuple[Series, int]]) -> dict:
+    """Replica 0 at the paper's λ values, per wire (the panels of Fig. 2)."""
+    rows = {}
+    for label, (s, p) in wires.items():
+        rows[label] = [
+            (s.positions[p, 0, s.j(lm)], lm)
+            for lm in paper.PAPER_LAMBDAS
+            if s.valid(p, 0, s.j(lm)) and np.isclose(s.lam[s.j(lm)], lm)
+        ]
+    return rows
+
+
+def measure(ctx: Context) -> Record:
+    """Contacts, smoothness and turning points at the Fig. 2 point."""
+    el = ctx.series["elastic"]
+    fig2 = el.index(paper.FIG2)
+    first = _onset(el.lam, el.obs["contacts_interior"][fig2])
+    first_any = _onset(el.lam, el.obs["contacts"][fig2])
+    extra: dict = {"contact_onset": {"interior": first, "any": first_any}}
+    c0 = el.obs["contacts"][fig2, 0]
+    hit0 = np.flatnonzero(np.nan_to_num(c0) > 0)
+    if hit0.size:
+        x = el.positions[fig2, 0, hit0[0]]
+        pairs, _ = close_segment_pairs(x, CONTACT_FACTOR * el.hard_core)
+        extra["first_contact"] = {"lam": float(el.lam[hit0[0]]), "segment_pairs": pairs.tolist()}
+    extra["contacts_fig2"] = {
+        "lam": el.lam,
+        "mean": np.nanmean(el.obs["contacts"][fig2], axis=0),
+    }
+    wires = {
+        "Newton, per length": (el, fig2),
+        "Newton, per node": (ctx.series["per_node"], 0),
+        "Powell, per length": (ctx.series["powell"], 0),
+    }
+    panels = dict(
+        zip(
+            ("Newton, λ r² per length", "Newton, λ r² per node", "Powell (paper's method)"),
+            wires.values(),
+            strict=True,
+        )
+    )
+    return Record(
+        rows=(_contact_row(first, first_any, ctx.replicas),),
+        claims=(*_shape_claims(wires), _stretching_claim(el, fig2)),
+        extra=extra,
+        detail={"configurations": _configurations(panels), "n_segments": el.positions.shape[3] - 1},
+    )
+
+
+def draw(rec: Record) -> dict:
+    """Fig. 2: the configurations, one row per wire."""
+    from ..figures import plot_configuration_rows
+
+    fig = plot_configuration_rows(
+        rec.detail["configurations"], title="(k_b, k_s) = (5, 5e5), replica 0 (paper's Fig. 2)"
+    )
+    return {"fig2_configurations": fig}
+
+
+def discuss(rec: Record, records) -> dict[str, str]:
+    """Where the first contact is, and what we count as a contact."""
+    ex = rec.extra
+    fc = ex.get("first_contact")
+    if not fc:
+        return {}
+    n_seg = rec.detail["n_segments"]
+    ends = all(max(min(i, j), n_seg - 1 - max(i, j)) <= 2 for i, j in fc["segment_pairs"])
+    what = (
+        "the wire's two ends, closing the first loop (the 'water drop' of Fig. 2 and "
+        "of the loop-shape figure)"
+        if ends
+        else "segments " + ", ".join(f"{i}-{j}" for i, j in fc["segment_pairs"][:5])
+    )
+    cf = ex["contacts_fig2"]
+    n1000 = float(np.interp(1000.0, cf["lam"], cf["mean"]))
+    return {
+        "lambda_contact": (
+            f"Replica 0 first touches at λ = {fc['lam']:g}, between {what}; at λ = 1000 the "
+            f"replicas have {n1000:.0f} segment pairs in contact on average (results.json: "
+            "contacts_fig2). The paper does not define a contact; we count pairs of "
+            f"non-adjacent segments closer than {CONTACT_FACTOR:g} hard-core widths, and for "
+            "this row only pairs away from the wire's ends (loops touching loops, not the ends "
+            "closing a loop or the two tails running side by side)."
+        )
+    }

@@ -1,0 +1,99 @@
+"""Writing the report: figures, ``results.json``, ``report.md`` and ``report.html``, and the
+check that it is complete. Iterates over the sections; knows none of them."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from ..storage import atomic_write_text
+from . import registry
+from .analysis import Analysis, _read_profile, analyse
+from .common import _jsonable
+from .document import blocks
+from .render import to_html, to_markdown
+
+__all__ = ["check_report", "make_figures", "write_report"]
+
+
+def make_figures(an: Analysis) -> dict:
+    """Every section's figures (stem -> matplotlib Figure), each drawn from its record."""
+    out = {}
+    for s in an.sections:
+        figs = s.draw(an.records[s.NAME])
+        if set(figs) != set(s.FIGURES):
+            raise ValueError(
+                f"section {s.NAME!r} drew {sorted(figs)} but declares {sorted(s.FIGURES)}"
+            )
+        out.update(figs)
+    return out
+
+
+def _save(figs: dict, figdir: Path) -> None:
+    figdir.mkdir(parents=True, exist_ok=True)
+    for stem, fig in figs.items():
+        for ext in ("png", "svg"):
+            tmp = figdir / f".{stem}.tmp.{ext}"
+            fig.savefig(tmp, dpi=110)
+            tmp.replace(figdir / f"{stem}.{ext}")
+
+
+def write_report(out, *, log: Callable[[str], None] | None = None, sections=None) -> dict:
+    """Analyse the stores in ``out`` and write figures, ``results.json``, ``report.md`` and
+    ``report.html``. Returns the paths written and what :func:`check_report` found missing.
+    ``sections``: default :func:`crumple.reproduce.registry.sections`."""
+    out = Path(out)
+    meta = _read_profile(out)
+    t0 = time.perf_counter()
+    an = analyse(out, sections=sections)
+    if log:
+        log(f"analysed in {time.perf_counter() - t0:.1f} s; drawing figures")
+    figdir = out / "figures"
+    figs = make_figures(an)
+    _save(figs, figdir)
+    doc = blocks(an, meta)
+    results = _jsonable({**an.to_json(), "versions": meta.get("versions", {})})
+    atomic_write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False) + "\n")
+    atomic_write_text(out / "report.md", to_markdown(doc))
+    atomic_write_text(out / "report.html", to_html(doc, figdir))
+    return {
+        "report": str(out / "report.html"),
+        "markdown": str(out / "report.md"),
+        "results": str(out / "results.json"),
+        "missing": check_report(out, sections=an.sections),
+        "rows": len(an.rows),
+        "figures": len(figs),
+    }
+
+
+def check_report(out, *, sections=None) -> list[str]:
+    """What a complete report lacks: figure files, table rows (one per value the sections
+    declare) with a number and a verdict. Empty when complete."""
+    out = Path(out)
+    secs = registry.sections() if sections is None else tuple(sections)
+    values = [v for s in secs for v in s.VALUES]
+    missing = []
+    for stem in registry.figures(secs):
+        for ext in ("png", "svg"):
+            if not (out / "figures" / f"{stem}.{ext}").is_file():
+                missing.append(f"figures/{stem}.{ext}")
+    for name in ("report.md", "report.html", "results.json"):
+        if not (out / name).is_file():
+            missing.append(name)
+    if (out / "results.json").is_file():
+        res = json.loads((out / "results.json").read_text())
+        got = {r["key"]: r for r in res.get("rows", [])}
+        for v in values:
+            r = got.get(v.key)
+            if r is None:
+                missing.append(f"table row {v.key}")
+            elif r.get("verdict") in (None, "not measured"):
+                missing.append(f"table row {v.key} has no value")
+    if (out / "report.md").is_file():
+        md = (out / "report.md").read_text()
+        for v in values:
+            if f"| {v.quantity.replace('|', chr(92) + '|')} |" not in md:
+                missing.append(f"report.md row {v.key}")
+    return missing

@@ -1,0 +1,201 @@
+"""The stage-level results of one experiment's store (:class:`Series`) and the measures that
+every section applies to them: α (R_g ~ λ^α), D_M at one stage, local slopes, convergence.
+
+:func:`_series` reads a store (:func:`crumple.sweep.load`) and computes, at every stage of
+every run, the observables the sections share: ``r_max``, the RMS radius, contacts, the
+largest turning angle, the contour length and γ = E_s/E_b. Nothing here simulates.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import paper
+from ..fit import fit_power_law
+from ..geometry import close_segment_pairs, segment_lengths, turning_angles
+from ..observables import mass_size_exponent, r_max, radius_of_gyration
+from .common import Estimate, _combine, _f
+
+#: A contact: two non-adjacent segments closer than this many hard-core widths.
+CONTACT_FACTOR = 2.0
+#: Contacts "between loops": both segments at least this fraction of the wire from its ends.
+END_FRACTION = 0.1
+#: A wire whose joints all turn by less than this [rad] is straight (γ undefined).
+STRAIGHT = 1e-3
+#: The stage of Fig. 3 (and of the D_M rows).
+LAM_FIG3 = 1000.0
+
+
+def _load(store: Path):
+    from ..sweep import IncompleteSweepWarning, load
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", IncompleteSweepWarning)
+        ds = load(store, positions=True)
+    incomplete = [str(w.message) for w in caught if issubclass(w.category, IncompleteSweepWarning)]
+    return ds, incomplete
+
+
+def _point_keys(ds, levels) -> list[tuple]:
+    if "point" not in ds.dims:
+        return [()]
+    idx = ds.indexes["point"]
+    return (
+        [tuple(float(v) for v in t) for t in idx] if len(levels) > 1 else [(float(v),) for v in idx]
+    )
+
+
+@dataclass
+class Series:
+    """Stage-level results of one experiment: arrays (point, replica, lam)."""
+
+    keys: list[tuple]
+    lam: np.ndarray
+    positions: np.ndarray  # (point, replica, lam, node, 2)
+    energies: dict[str, np.ndarray]
+    converged: np.ndarray
+    max_force: np.ndarray
+    done: np.ndarray  # (point, replica)
+    incomplete: list[str]
+    hard_core: float
+    obs: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def index(self, key) -> int:
+        return self.keys.index(tuple(float(k) for k in key))
+
+    @property
+    def ds(self) -> float:
+        """Rest length of a segment (L0 = 1)."""
+        return 1.0 / (self.positions.shape[3] - 1)
+
+    def j(self, lam: float) -> int:
+        return int(np.argmin(np.abs(self.lam - lam)))
+
+    @property
+    def replicas(self) -> int:
+        return self.positions.shape[1]
+
+    def valid(self, p: int, r: int, j: int) -> bool:
+        return bool(np.isfinite(self.positions[p, r, j]).all())
+
+
+def _series(store: Path, levels: tuple[str, ...]) -> Series:
+    ds, incomplete = _load(store)
+    keys = _point_keys(ds, levels)
+    if "point" not in ds.dims:
+        ds = ds.expand_dims("point")
+    m = json.loads(ds.attrs["sweep"])
+    hard_core = float(m.get("wire", {}).get("hard_core", 1e-5))
+    s = Series(
+        keys=keys,
+        lam=ds["lam"].values.astype(float),
+        positions=ds["positions"].values,
+        energies={
+            t: ds[f"E_{t}"].values
+            for t in ("bending", "stretching", "confinement", "hard_core", "total")
+        },
+        converged=ds["converged"].values,
+        max_force=ds["max_force"].values,
+        done=ds["done"].values,
+        incomplete=incomplete,
+        hard_core=hard_core,
+    )
+    n_p, n_r, n_l = s.positions.shape[:3]
+    rm = np.full((n_p, n_r, n_l), np.nan)
+    rg = np.full_like(rm, np.nan)
+    contacts = np.full_like(rm, np.nan)
+    max_angle = np.full_like(rm, np.nan)
+    length = np.full_like(rm, np.nan)
+    interior = np.full_like(rm, np.nan)
+    for p in range(n_p):
+        for r in range(n_r):
+            for j in range(n_l):
+                if not s.valid(p, r, j):
+                    continue
+                x = s.positions[p, r, j]
+                rm[p, r, j] = r_max(x)
+                rg[p, r, j] = radius_of_gyration(x)
+                pairs, _ = close_segment_pairs(x, CONTACT_FACTOR * s.hard_core)
+                contacts[p, r, j] = pairs.shape[0]
+                m = max(1, int(END_FRACTION * (x.shape[0] - 1)))
+                far = (pairs.min(axis=1) >= m) & (pairs.max(axis=1) < x.shape[0] - 1 - m)
+                interior[p, r, j] = int(far.sum())
+                max_angle[p, r, j] = np.abs(turning_angles(x)).max()
+                length[p, r, j] = segment_lengths(x).sum()
+    s.obs.update(
+        r_max=rm,
+        rms=rg,
+        contacts=contacts,
+        contacts_interior=interior,
+        max_angle=max_angle,
+        length=length,
+    )
+    # γ = E_s/E_b is the energy split of a *bent* wire; on a straight wire (every joint
+    # straighter than STRAIGHT rad: the start of a ramp, or a soft wire that collapses into a
+    # compressed rod) E_b is round-off and γ is undefined: NaN, counted in the report.
+    s.obs["straight"] = max_angle < STRAIGHT
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eb = s.energies["bending"]
+        g = np.where(eb > 0, s.energies["stretching"] / eb, np.nan)
+    s.obs["gamma"] = np.where(s.obs["straight"], np.nan, g)
+    return s
+
+
+def _dm_fit(x, *, rg="r_max", method="exact", fit_range=paper.DM_RANGE):
+    """D_M and its regression error; NaN where M(R) = 0 somewhere in the range (no wire
+    near the centre of mass: the log-log fit is undefined there)."""
+    try:
+        f = mass_size_exponent(x, rg=rg, method=method, fit_range=fit_range)
+    except ValueError:
+        return math.nan, math.nan
+    return f.exponent, f.stderr
+
+
+def _alpha(s: Series, p: int, which: str = "r_max", lam_range=paper.ALPHA_RANGE) -> Estimate:
+    vals, errs, used = [], [], None
+    for r in range(s.replicas):
+        y = s.obs[which][p, r]
+        ok = np.isfinite(y) & (s.lam >= lam_range[0]) & (s.lam <= lam_range[1])
+        if ok.sum() < 3:
+            continue
+        f = fit_power_law(s.lam[ok], y[ok])
+        vals.append(f.exponent)
+        errs.append(f.stderr)
+        used = f.fit_range
+    return _combine(vals, errs, used)
+
+
+def _dm(s: Series, p: int, lam: float = LAM_FIG3, **kw) -> Estimate:
+    j = s.j(lam)
+    vals, errs = [], []
+    for r in range(s.replicas):
+        if s.valid(p, r, j):
+            v, e = _dm_fit(s.positions[p, r, j], **kw)
+            vals.append(v)
+            errs.append(e)
+    return _combine(vals, errs, tuple(kw.get("fit_range", paper.DM_RANGE)))
+
+
+def _local_slopes(lam, y):
+    """d ln y / d ln λ between successive stages, at the geometric midpoints."""
+    ok = np.isfinite(y) & (y > 0)
+    lx, ly = np.log(lam[ok]), np.log(y[ok])
+    return np.exp(0.5 * (lx[1:] + lx[:-1])), np.diff(ly) / np.diff(lx)
+
+
+def _convergence(s: Series) -> dict:
+    ran = np.isfinite(s.max_force)
+    return {
+        "runs": int(s.done.size),
+        "runs_done": int(s.done.sum()),
+        "stages": int(ran.sum()),
+        "stages_converged": int((s.converged & ran).sum()),
+        "largest_force": _f(float(np.nanmax(s.max_force))) if ran.any() else None,
+        "incomplete": s.incomplete,
+    }
