@@ -30,7 +30,6 @@ from crumple.reproduce import (
     check_report,
     loop_comparison,
     run,
-    write_report,
 )
 from crumple.theory import loop_shape
 
@@ -128,19 +127,11 @@ def test_loop_comparison_recognises_a_circle():
     assert res["rms_lemniscate"] > 0.1
 
 
-# ---- end to end: the smoke profile ------------------------------------------------------------
+# ---- end to end: the smoke profile (the ``smoke`` fixture is in conftest.py) -----------------
 
 GOLDEN = Path(__file__).parent / "data" / "smoke_results.json"
 #: Keys of results.json that may change without the physics changing (package versions).
 VOLATILE = ("versions",)
-
-
-@pytest.fixture(scope="module")
-def smoke(tmp_path_factory):
-    out = tmp_path_factory.mktemp("repro")
-    summary = run(out, "smoke", workers=2)
-    report = write_report(out)
-    return out, summary, report
 
 
 def test_smoke_report_is_complete(smoke):

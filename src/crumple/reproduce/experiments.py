@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from .. import paper
 from ..sweep import Sweep
 
-__all__ = ["DISORDER", "ELASTIC", "PER_NODE", "PLASTIC", "POWELL", "Experiment"]
+__all__ = ["DISORDER", "ELASTIC", "PAPER", "PER_NODE", "PLASTIC", "POWELL", "Experiment"]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -72,3 +72,7 @@ PER_NODE = Experiment(name="per_node", levels=(), build=_paper("per_node"))
 DISORDER = Experiment(name="disorder", levels=(), build=_paper("disorder"))
 #: Alternative: the paper's Powell minimiser, reduced.
 POWELL = Experiment(name="powell", levels=(), build=_paper("powell"), note=_powell_note)
+
+#: The paper's experiments in the order of :data:`crumple.paper.EXPERIMENTS` (the order of the
+#: report's "Runs" list; experiments of added studies follow).
+PAPER = (ELASTIC, PLASTIC, PER_NODE, DISORDER, POWELL)

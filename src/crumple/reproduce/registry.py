@@ -34,7 +34,7 @@ from . import (
     loop_shape,
     minimizer,
 )
-from .experiments import Experiment
+from .experiments import PAPER, Experiment
 
 __all__ = ["SECTIONS", "experiments", "figures", "register", "sections", "unregister"]
 
@@ -97,13 +97,15 @@ def _check(before, section) -> None:
 
 
 def experiments(secs=None) -> tuple[Experiment, ...]:
-    """Every experiment the sections read, each once, in order of first use."""
-    out: dict[str, Experiment] = {}
+    """Every experiment the sections read, each once: the paper's first (in the order of
+    :data:`.experiments.PAPER`), then the others in order of first use."""
+    used: dict[str, Experiment] = {}
     for s in sections() if secs is None else secs:
         for e in s.READS:
-            if out.setdefault(e.name, e) is not e:
+            if used.setdefault(e.name, e) is not e:
                 raise ValueError(f"two different experiments are named {e.name!r}")
-    return tuple(out.values())
+    first = [e for e in PAPER if e.name in used]
+    return (*first, *(e for e in used.values() if e not in first))
 
 
 def figures(secs=None) -> dict[str, str]:
