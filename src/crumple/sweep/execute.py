@@ -281,13 +281,7 @@ def run_sweep(
         for tmp in _runs_dir(out).glob(".*.tmp"):  # left by a run killed while writing
             tmp.unlink(missing_ok=True)
         atomic_write_text(out / MANIFEST, json.dumps(_manifest(sweep), indent=1))
-        todo = []
-        for run in sweep.runs():
-            state, _ = _classify(out, run.id)
-            if state == "corrupt":
-                _h5(out, run.id).unlink(missing_ok=True)
-            if state != "done":
-                todo.append(run)
+        todo = _todo(sweep, out)
         total, skipped = len(sweep), len(sweep) - len(todo)
         failed: dict[str, str] = {}
         computed: list[str] = []
@@ -307,6 +301,18 @@ def run_sweep(
         seconds=time.perf_counter() - t0,
         workers=n_workers,
     )
+
+
+def _todo(sweep: Sweep, out: Path) -> list[Run]:
+    """The runs of ``sweep`` that ``out`` does not hold; damaged files are deleted."""
+    todo = []
+    for run in sweep.runs():
+        state, _ = _classify(out, run.id)
+        if state == "corrupt":
+            _h5(out, run.id).unlink(missing_ok=True)
+        if state != "done":
+            todo.append(run)
+    return todo
 
 
 def _execute(client, todo, out, total, skipped, progress, refresh, t0):

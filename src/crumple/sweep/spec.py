@@ -248,7 +248,8 @@ class Sweep:
 
     # ---- expansion --------------------------------------------------------------------------
 
-    def _make_plan(self) -> _Plan:
+    def _grid(self) -> tuple[list[_Dim], dict[str, dict]]:
+        """The swept dimensions of [wire] and [ramp], and the values they fix."""
         dims: list[_Dim] = []
         base: dict[str, dict] = {"wire": {}, "ramp": {}}
         for table, spec, known in (
@@ -277,6 +278,10 @@ class Sweep:
                     dims.append(self._dim(key, (table, key), value))
                 else:
                     base[table][key] = value
+        return dims, base
+
+    def _make_plan(self) -> _Plan:
+        dims, base = self._grid()
         point_names, point_values = self._points(dims)
         names = [d.name for d in dims] + list(point_names)
         if len(set(names)) != len(names):
