@@ -1,7 +1,7 @@
 """crumple reproduce: the experiments as data, the verdict arithmetic, the report's completeness.
 
 The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 9 stages) once
-for the module and checks that every figure file and every table row of the report exists, and
+per session (the ``smoke`` fixture, tests/conftest.py) and checks that every figure file and every table row of the report exists, and
 that its ``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
 number (exact equality: a refactor must not move a bit). When a change to the physics moves the
 numbers on purpose, regenerate the golden file and say why in the commit::
