@@ -27,12 +27,15 @@ import numpy as np
 
 from crumple.fit import MeanEstimate, PowerLawFit, fit_power_law, mean_confidence_interval
 from crumple.geometry import close_segment_pairs, find_crossings
+from crumple.loops import LoopStats, loops
 
 __all__ = [
+    "LoopStats",
     "center_of_mass",
     "count_contacts",
     "energy_ratio",
     "ensemble_mass_size_exponent",
+    "loops",
     "mass_size_exponent",
     "mass_within",
     "measure",
