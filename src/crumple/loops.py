@@ -40,7 +40,15 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from crumple.geometry import _box_pairs, _orient, find_crossings, node_segment_pairs
+from crumple.geometry import (
+    _build_hash,
+    _cell,
+    _cell_hash,
+    _cell_size,
+    _orient,
+    find_crossings,
+    node_segment_pairs,
+)
 
 __all__ = ["LoopStats", "loops"]
 
@@ -84,6 +92,8 @@ class LoopStats:
         Bounded faces narrower than ``min_width`` (inside contacts; not loops).
     boundaries : tuple of ndarray or None
         With ``boundaries=True``: each loop's boundary walk, shape (n_k, 2), counter-clockwise.
+    links : ndarray or None
+        With ``boundaries=True``: the contact links, shape (n_links, 2, 2) ``[length]``.
     """
 
     contact_distance: float
@@ -96,6 +106,7 @@ class LoopStats:
     n_links: int
     n_slivers: int
     boundaries: tuple | None = None
+    links: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -233,6 +244,48 @@ def _overlap_from(sx, sy, ax, ay, bx, by):
 
 
 @njit(cache=True)
+def _link_box_pairs(lox, loy, hix, hiy, ns):
+    """Pairs (a, b), a < b, b >= ns (a link), of overlapping boxes, each once.
+
+    Like :func:`crumple.geometry._box_pairs` but queried from the links only: the segments
+    (indices < ns) are not paired with each other, which is most of the work there.
+    """
+    ne = lox.shape[0]
+    out = np.empty((max(16, 4 * (ne - ns)), 2), dtype=np.int64)
+    m = 0
+    ox = lox.min()
+    oy = loy.min()
+    h = _cell_size(lox, loy, hix, hiy)
+    start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
+    for b in range(ns, ne):
+        x0 = _cell(lox[b], ox, h)
+        x1 = _cell(hix[b], ox, h)
+        y0 = _cell(loy[b], oy, h)
+        y1 = _cell(hiy[b], oy, h)
+        for ix in range(x0, x1 + 1):
+            for iy in range(y0, y1 + 1):
+                bk = _cell_hash(ix, iy, mask)
+                for k in range(start[bk], start[bk + 1]):
+                    a = item[k]
+                    if a == b or (a >= ns and a > b) or cx[k] != ix or cy[k] != iy:
+                        continue
+                    if lox[a] > hix[b] or lox[b] > hix[a] or loy[a] > hiy[b] or loy[b] > hiy[a]:
+                        continue
+                    if _cell(max(lox[a], lox[b]), ox, h) != ix:
+                        continue
+                    if _cell(max(loy[a], loy[b]), oy, h) != iy:
+                        continue
+                    if m == out.shape[0]:
+                        bigger = np.empty((2 * m, 2), dtype=np.int64)
+                        bigger[:m] = out
+                        out = bigger
+                    out[m, 0] = a
+                    out[m, 1] = b
+                    m += 1
+    return out[:m]
+
+
+@njit(cache=True)
 def _link_conflicts(pos, lk, lo, fx, fy, ll, lj):
     """Which links to drop: those touching the wire away from their ends, and those crossing a
     link that is not longer (of mutually crossing links the shortest stays)."""
@@ -255,13 +308,11 @@ def _link_conflicts(pos, lk, lo, fx, fy, ll, lj):
         loy[ns + q] = min(pos[k, 1], fy[q])
         hiy[ns + q] = max(pos[k, 1], fy[q])
     drop = np.zeros(nl, dtype=np.bool_)
-    if ne == 0:
+    if nl == 0:
         return drop
-    pairs = _box_pairs(lox, loy, hix, hiy, 1)
+    pairs = _link_box_pairs(lox, loy, hix, hiy, ns)
     for p in range(pairs.shape[0]):
-        a, b = pairs[p, 0], pairs[p, 1]  # a < b
-        if b < ns:
-            continue  # two segments: the wire does not cross itself (checked before)
+        a, b = pairs[p, 0], pairs[p, 1]  # a < b, b a link
         q = b - ns
         k = lk[q]
         ox = lo[q]
@@ -314,6 +365,47 @@ def _link_conflicts(pos, lk, lo, fx, fy, ll, lj):
 # --------------------------------------------------------------------------------------------
 # Faces
 # --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _next_half_edges(org, ang, n_v):
+    """Successor of each half-edge around its face (face on the left, bounded faces CCW).
+
+    Half-edges ``2e`` and ``2e + 1`` are twins. Out of each vertex the half-edges are sorted
+    by angle (counting sort by vertex, then insertion sort: degrees are small); the successor
+    of u -> v is the half-edge out of v just clockwise of v -> u.
+    """
+    nh = org.shape[0]
+    start = np.zeros(n_v + 1, dtype=np.int64)
+    for h in range(nh):
+        start[org[h] + 1] += 1
+    for v in range(n_v):
+        start[v + 1] += start[v]
+    order = np.empty(nh, dtype=np.int64)
+    fill = start[:n_v].copy()
+    for h in range(nh):
+        order[fill[org[h]]] = h
+        fill[org[h]] += 1
+    for v in range(n_v):
+        for i in range(start[v] + 1, start[v + 1]):
+            h = order[i]
+            a = ang[h]
+            j = i - 1
+            while j >= start[v] and ang[order[j]] > a:
+                order[j + 1] = order[j]
+                j -= 1
+            order[j + 1] = h
+    rank = np.empty(nh, dtype=np.int64)
+    for i in range(nh):
+        rank[order[i]] = i
+    nxt = np.empty(nh, dtype=np.int64)
+    for h in range(nh):
+        t = h ^ 1
+        v = org[t]
+        s0 = start[v]
+        d = start[v + 1] - s0
+        nxt[h] = order[s0 + (rank[t] - s0 - 1) % d]
+    return nxt
 
 
 @njit(cache=True)
@@ -565,6 +657,7 @@ def _empty(c: float, w: float, n_links: int = 0, boundaries: bool = False) -> Lo
         n_links=n_links,
         n_slivers=0,
         boundaries=() if boundaries else None,
+        links=_frozen(np.empty((0, 2, 2)), float) if boundaries else None,
     )
 
 
@@ -763,16 +856,7 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
     is_link = np.zeros(2 * n_e, dtype=bool)
     is_link[2 * n_wire :] = True
     hlen = np.repeat(e_len, 2)
-    order = np.lexsort((ang, org))
-    n_v = vx.shape[0]
-    start = np.searchsorted(org[order], np.arange(n_v + 1))
-    rank = np.empty(2 * n_e, dtype=np.int64)
-    rank[order] = np.arange(2 * n_e)
-    twin = np.arange(2 * n_e) ^ 1
-    v = dst
-    s0 = start[v]
-    d = start[v + 1] - s0
-    nxt = order[s0 + (rank[twin] - s0 - 1) % d]
+    nxt = _next_half_edges(org, ang, vx.shape[0])
     face, nf = _trace_faces(nxt)
     area, wire_len, link_len, _, cx, cy = _face_sums(face, nf, org, dst, vx, vy, is_link, hlen)
     outer = int(np.argmin(area))
@@ -811,4 +895,9 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
         n_links=n_links,
         n_slivers=int(np.count_nonzero(bounded & ~is_loop)),
         boundaries=bnd,
+        links=(
+            _frozen(np.stack([np.c_[vx[l_org], vy[l_org]], np.c_[vx[l_dst], vy[l_dst]]], 1), float)
+            if want_boundaries
+            else None
+        ),
     )
