@@ -11,6 +11,8 @@ loop count needs.
 
     python benchmarks/bench_loops.py            # N = 10^3, 10^4, 10^5
     python benchmarks/bench_loops.py --quick    # N = 10^3, 10^4
+    python benchmarks/bench_loops.py --shapely  # also Shapely's node + polygonize (not a
+                                                # dependency: pip install shapely)
 """
 
 from __future__ import annotations
@@ -77,6 +79,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--shapely", action="store_true", help="compare with shapely.polygonize")
     args = ap.parse_args(argv)
     sizes = [10**3, 10**4] if args.quick else [10**3, 10**4, 10**5]
     c = 1.0
@@ -106,6 +109,33 @@ def main(argv=None) -> None:
                 f"{1e6 * tl / n:>7.2f}" + scale
             )
             prev = (n, tl)
+    if args.shapely:
+        compare_shapely(sizes, c)
+
+
+def compare_shapely(sizes, c: float) -> None:
+    """Faces by Shapely from the same wire and links: node the segments, polygonize.
+
+    The links' feet are computed points, not exactly on their segments, so the graph must be
+    noded first; the loops would then be the polygons with 2A/P >= c (no depth, no runs).
+    """
+    import shapely
+
+    print(f"\n{'N':>7} {'ours s':>8} {'shapely s':>10} {'faces':>7} {'shapely faces':>14}")
+    for n in sizes:
+        x = wavy_spiral(n)
+        st = loops(x, contact_distance=c, boundaries=True)
+        t0 = time.perf_counter()
+        st = loops(x, contact_distance=c, boundaries=True)
+        t1 = time.perf_counter()
+        segs = np.concatenate([np.stack([x[:-1], x[1:]], 1), np.asarray(st.links)])
+        t2 = time.perf_counter()
+        noded = shapely.node(shapely.multilinestrings(shapely.linestrings(segs)))
+        polys = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+        shapely.area(polys), shapely.length(polys)
+        t3 = time.perf_counter()
+        print(f"{n:>7} {t1 - t0:>8.3f} {t3 - t2:>10.3f} {st.count + st.n_slivers:>7} "
+              f"{len(polys):>14}")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -337,3 +337,12 @@ def test_result_is_frozen():
         st_.area = np.zeros(1)  # type: ignore[misc]
     with pytest.raises(ValueError):
         st_.area[0] = 0.0
+
+
+@pytest.mark.parametrize("turns", [2, 3, 5])
+def test_spiral_with_free_ends_loses_the_loops_they_closed(turns):
+    x = snail(turns)  # 200 segments per turn: cut 30 off an end to free it of the next turn
+    assert loops(x[30:], contact_distance=C).count == turns - 1  # the innermost disc opens
+    assert loops(x[:-30], contact_distance=C).count == turns - 1  # the outermost crescent opens
+    st_ = loops(x[30:-30], contact_distance=C)
+    assert st_.count == turns - 2 and st_.counts_by_depth == (1,) * (turns - 2)

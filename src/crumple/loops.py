@@ -871,11 +871,11 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
     ids = ids[np.lexsort((cy[ids], cx[ids], -area[ids]))]
     bnd = None
     if want_boundaries:
+        first_h = np.full(nf, -1, dtype=np.int64)
+        first_h[face[::-1]] = np.arange(face.shape[0])[::-1]  # lowest half-edge of each face
         bnd_list = []
         for f in ids:
-            hs = np.flatnonzero(face == f)
-            # walk the cycle in order
-            h0 = hs[0]
+            h0 = first_h[f]
             walk = [h0]
             h = nxt[h0]
             while h != h0:
