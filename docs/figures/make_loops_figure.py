@@ -93,7 +93,7 @@ def main() -> None:
                  "with mean width 2A/P >= c; colour = depth", fontsize=10)  # fmt: skip
     fig.tight_layout()
     out = HERE / "loops.png"
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=90)
     print(f"wrote {out}")
 
 
