@@ -201,6 +201,28 @@ def test_drop_with_parallel_arms():
         assert st_.n_slivers >= 1  # the gap between the arms
 
 
+def pressed_strands(k: int = 10, radius: float = 2.0, dphi: float = 0.2) -> np.ndarray:
+    """Two concentric polygonal arcs, the outer one's nodes staggered by half a segment and
+    its chords 0.3 C outside the inner nodes: each inner node touches an outer chord, and
+    between two such contacts the chords leave a gap of ~ s dphi / 4 = 0.02 > C (a hairpin
+    joins the two arcs)."""
+    a = radius * np.c_[np.cos(np.arange(k + 1) * dphi), np.sin(np.arange(k + 1) * dphi)]
+    ang = (np.arange(k)[::-1] + 0.5) * dphi
+    b = (radius + 0.3 * C) / np.cos(dphi / 2) * np.c_[np.cos(ang), np.sin(ang)]
+    return np.r_[a, b]
+
+
+def test_gaps_between_the_nodes_of_pressed_strands_are_not_loops():
+    x = pressed_strands()
+    assert not has_crossings(x)
+    st_ = loops(x, contact_distance=C)
+    seg = np.hypot(*np.diff(x, axis=0).T).mean()
+    assert st_.min_width == pytest.approx(0.25 * seg)  # a quarter segment (0.1) > C
+    assert st_.count == 0 and st_.n_links == 9 and st_.n_slivers == 9
+    # at min_width = C each gap (mean width 0.013) would be a loop
+    assert loops(x, contact_distance=C, min_width=C).count == 9
+
+
 def test_random_self_avoiding_wire_without_contacts_has_no_loop():
     rng = np.random.default_rng(7)
     found = 0

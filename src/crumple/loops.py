@@ -23,13 +23,14 @@ Faces
 -----
 The faces are traced on a half-edge structure (edges sorted by angle around each vertex);
 exactly one face is unbounded. A bounded face whose *mean width* ``2 A / P`` (area over half its
-boundary length, links included) is below ``min_width`` (default ``contact_distance``) lies inside
-a contact: the sliver between consecutive links of two strands touching along a run, the tip of
-a fold whose arms touch. It is not a loop. The other bounded faces are the loops. A run of
-contacts therefore acts as one contact, the loops on either side of it being closed at its
-ends.
+boundary length, links included) is below ``min_width`` lies inside a contact: the sliver
+between consecutive links of two strands touching along a run, the tip of a fold whose arms
+touch, the hairline gap between the nodes of two pressed strands (hence the default
+``max(c, RESOLUTION × mean segment length)``). It is not a loop. The other bounded faces are
+the loops. A run of contacts therefore acts as one contact, the loops on either side of it
+being closed at its ends.
 
-Cost: O(N log N) (spatial hashes, one sort of the half-edges); N = 10^5 in ~0.1 s.
+Cost: O(N log N) (spatial hashes, one sort of the half-edges); N = 10^5 in 0.2-0.4 s.
 """
 
 from __future__ import annotations
@@ -50,7 +51,14 @@ from crumple.geometry import (
     node_segment_pairs,
 )
 
-__all__ = ["LoopStats", "loops"]
+__all__ = ["RESOLUTION", "LoopStats", "loops"]
+
+#: Default ``min_width`` as a fraction of the mean segment length (when above the contact
+#: distance). The narrowest loop a chain of segments of length s can close is a triangle, of
+#: mean width 2A/P = s/(2√3) ≈ 0.29 s; two strands pressed together touch at their nodes and
+#: leave, between two contacts, a gap of at most the chords' sagittas, ~ s θ/8 each for turning
+#: angles θ, i.e. below s/4 for any θ < 1 rad. A quarter segment separates the two.
+RESOLUTION = 0.25
 
 
 # --------------------------------------------------------------------------------------------
@@ -688,7 +696,9 @@ def loops(
         than the hard core lets strands get at zero pressure plus the same again.
     min_width : float, optional
         ``[length]``, > 0: faces with ``2 A / P`` below it are not loops. Default
-        ``contact_distance``.
+        ``max(contact_distance, RESOLUTION * mean segment length)``: a quarter segment is
+        below the narrowest loop a chain of segments can close (a triangle, 0.29 segment) and
+        above the gaps left between the nodes of two strands pressed together.
     boundaries : bool
         Also return each loop's boundary polygon (for drawing).
 
@@ -725,11 +735,15 @@ def loops(
     if not np.all(np.isfinite(pos)):
         raise ValueError("positions contain NaN or infinite values")
     c = _check_length("contact_distance", contact_distance)
-    w = c if min_width is None else _check_length("min_width", min_width)
     if pos.shape[0] >= 2:
         keep = np.r_[True, np.any(np.diff(pos, axis=0) != 0.0, axis=1)]
         pos = np.ascontiguousarray(pos[keep])
     n = pos.shape[0]
+    seg_len = np.hypot(*np.diff(pos, axis=0).T)
+    if min_width is None:
+        w = max(c, RESOLUTION * float(seg_len.mean())) if n >= 2 else c
+    else:
+        w = _check_length("min_width", min_width)
     if n < 4:
         return _empty(c, w, boundaries=boundaries)
     cross = find_crossings(pos)
@@ -741,7 +755,6 @@ def loops(
             "are defined for a wire that does not intersect itself (a contact is a distance "
             "below contact_distance, never an intersection)"
         )
-    seg_len = np.hypot(*np.diff(pos, axis=0).T)
     cum = np.r_[0.0, np.cumsum(seg_len)]
     nk, sj = node_segment_pairs(pos, c)
     lk, lj, lt, lo, ll = _links(pos, cum, nk.astype(np.int64), sj.astype(np.int64), c)
@@ -858,6 +871,13 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
     hlen = np.repeat(e_len, 2)
     nxt = _next_half_edges(org, ang, vx.shape[0])
     face, nf = _trace_faces(nxt)
+    # Euler: the wire is a tree (one face) and every link closes one more face. Anything else
+    # means the drawing is not plane (edges crossing by round-off): refuse rather than guess.
+    if nf != n_links + 1:
+        raise RuntimeError(
+            f"loops: the wire and its {n_links} contact links trace {nf} faces instead of "
+            f"{n_links + 1}; the contact graph is not plane (strands closer than round-off?)"
+        )
     area, wire_len, link_len, _, cx, cy = _face_sums(face, nf, org, dst, vx, vy, is_link, hlen)
     outer = int(np.argmin(area))
     bounded = np.ones(nf, dtype=bool)
