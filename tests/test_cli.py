@@ -69,6 +69,24 @@ def test_measure_matches_library(capsys, wire_file, name):
             assert got["mass_size_exponent"][key] == value, key
     np.testing.assert_allclose(got["mass_within"], want["mass_within"], rtol=1e-12)
     assert got["r_max"] == pytest.approx(want["r_max"])
+    assert got["loops"] == want["loops"]
+
+
+def test_measure_prints_the_loops(capsys, tmp_path):
+    # a 60-gon whose ends stop 3e-3 apart: one loop at loop distance 1e-2, none at 1e-3
+    phi = 2 * np.pi * np.arange(61) / 60
+    x = np.c_[np.cos(phi), np.sin(phi)]
+    x[-1] = x[0] - 3e-3 * (x[0] - x[-2]) / np.linalg.norm(x[0] - x[-2])
+    np.save(tmp_path / "ring.npy", x)
+    f = tmp_path / "ring.npy"
+    code, out, err = run_cli(capsys, "measure", f, "--center", "1,0", "--loop-distance", "1e-2")
+    assert code == 0, err
+    got = json.loads(out)["loops"]
+    assert got == json.loads(json.dumps(measure(x, center=(1, 0), loop_distance=1e-2)["loops"]))
+    assert got["count"] == 1 and got["counts_by_depth"] == [1] and got["contact_distance"] == 1e-2
+    assert got["area"]["total"] == pytest.approx(30 * np.sin(2 * np.pi / 60), rel=1e-12)
+    code, out, _ = run_cli(capsys, "measure", f, "--center", "1,0")  # default 2 x 1e-5
+    assert code == 0 and json.loads(out)["loops"]["count"] == 0
 
 
 BAD = [
@@ -84,6 +102,7 @@ BAD = [
     ("energy", "{d}/w.npy", "--kb", "5", "--ks", "5e5", "--lam", "1", "--bogus"),
     ("measure", "{d}/w.npy", "--fit-range", "0.5"),
     ("measure", "{d}/w.npy", "--rg", "median"),
+    ("measure", "{d}/w.npy", "--loop-distance", "-1"),
     ("run", "--kb", "nan", "--out", "{d}/o"),
     ("run", "--config", "{d}/missing.toml"),
     ("run", "--config", "{d}/bad.toml"),

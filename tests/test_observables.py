@@ -436,6 +436,7 @@ KEYS = {
     "crossings",
     "mass_size_exponent",
     "mass_within",
+    "loops",
 }
 
 
@@ -463,6 +464,9 @@ def test_measure_matches_the_library():
     assert table[:, 0] == pytest.approx(np.geomspace(0.01, 1.0, obs.DEFAULT_N_TABLE) * r_max(wire))
     assert table[:, 1].tolist() == mass_within(wire, table[:, 0]).tolist()
     assert table[-1, 1] == 1.0
+    # loops at twice the contact distance (None for a wire that crosses itself)
+    want = None if out["crossings"] else obs.loops(wire, contact_distance=0.04).to_dict()
+    assert out["loops"] == want
 
 
 def test_measure_options():

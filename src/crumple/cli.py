@@ -139,6 +139,7 @@ def _cmd_measure(args) -> int:
         "rg": args.rg,
         "fit_range": tuple(_floats(args.fit_range, "--fit-range", 2)),
         "contact_distance": args.contact_distance,
+        "loop_distance": args.loop_distance,
     }
     if args.center is not None:
         kwargs["center"] = tuple(_floats(args.center, "--center", 2))
@@ -559,6 +560,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rg", choices=["r_max", "rms"], default="r_max", help="R_G (default r_max)")
     p.add_argument("--fit-range", default="0.5,1", help="D_M fit range in R/R_G")
     p.add_argument("--contact-distance", type=float, default=1e-5, help="contact distance")
+    p.add_argument(
+        "--loop-distance", type=float, help="loops' contact distance (default 2 x the above)"
+    )
     p.set_defaults(func=_cmd_measure)
 
     p = sub.add_parser("sweep", help="run a parameter sweep on Dask, resumably (docs/sweeps.md)")

@@ -27,12 +27,15 @@ import numpy as np
 
 from crumple.fit import MeanEstimate, PowerLawFit, fit_power_law, mean_confidence_interval
 from crumple.geometry import close_segment_pairs, find_crossings
+from crumple.loops import LoopStats, loops
 
 __all__ = [
+    "LoopStats",
     "center_of_mass",
     "count_contacts",
     "energy_ratio",
     "ensemble_mass_size_exponent",
+    "loops",
     "mass_size_exponent",
     "mass_within",
     "measure",
@@ -647,6 +650,7 @@ def measure(
     rg: str = "r_max",
     fit_range=(0.5, 1.0),
     contact_distance: float = 1e-5,
+    loop_distance: float | None = None,
 ) -> dict:
     """All observables of one wire as a JSON-able dict (what ``crumple measure`` prints).
 
@@ -662,7 +666,11 @@ def measure(
     * ``mass_size_exponent``: ``{"value", "stderr", "fit_range", "n_points", "rg"}`` from
       :func:`mass_size_exponent` (``fit_range`` in units of R_G);
     * ``mass_within``: list of ``[R, M(R)]`` (Eq. 3, exact lengths) at ``radii``, or by default
-      at 25 radii log-spaced from ``r_max / 100`` to ``r_max``.
+      at 25 radii log-spaced from ``r_max / 100`` to ``r_max``;
+    * ``loops``: :meth:`LoopStats.to_dict` of :func:`loops` at ``loop_distance`` (default
+      ``2 * contact_distance``, i.e. twice the hard-core width): ``count``,
+      ``counts_by_depth``, ``area`` (the distribution's count, total, mean, min, quartiles,
+      max), ``contact_distance``, ``min_width``; ``None`` for a wire that crosses itself.
 
     All values are plain Python floats, ints and lists.
 
@@ -678,6 +686,8 @@ def measure(
         ``R / R_G`` range of the D_M fit.
     contact_distance : float
         ``[length]``, > 0.
+    loop_distance : float, optional
+        Contact distance of :func:`loops` ``[length]``, > 0. Default ``2 * contact_distance``.
 
     Returns
     -------
@@ -691,6 +701,8 @@ def measure(
     ([0.0, 0.0], 0.5, 0, [[0.25, 0.5]])
     >>> round(out["mass_size_exponent"]["value"], 10)
     1.0
+    >>> out["loops"]["count"], out["loops"]["contact_distance"]
+    (0, 2e-05)
     >>> json.loads(json.dumps(out)) == out
     True
     """
@@ -719,14 +731,23 @@ def measure(
         raise ValueError(f"contact_distance must be a number, got {contact_distance!r}") from err
     if not (math.isfinite(dist) and dist > 0):
         raise ValueError(f"contact_distance must be positive, got {contact_distance!r}")
+    loop_dist = 2.0 * dist if loop_distance is None else loop_distance
+    try:
+        loop_dist = float(loop_dist)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"loop_distance must be a number, got {loop_distance!r}") from err
+    if not (math.isfinite(loop_dist) and loop_dist > 0):
+        raise ValueError(f"loop_distance must be positive, got {loop_distance!r}")
     fit = mass_size_exponent(pos, rg=rg, fit_range=(lo, hi), center=c)
     m = mass_within(pos, table_r, center=c)
+    crossings = int(find_crossings(pos).shape[0])
+    loop_stats = None if crossings else loops(pos, contact_distance=loop_dist).to_dict()
     return {
         "center": [float(c[0]), float(c[1])],
         "r_max": float(size),
         "radius_of_gyration": radius_of_gyration(pos, c),
         "contacts": count_contacts(pos, dist),
-        "crossings": int(find_crossings(pos).shape[0]),
+        "crossings": crossings,
         "mass_size_exponent": {
             "value": float(fit.exponent),
             "stderr": float(fit.stderr),
@@ -735,4 +756,5 @@ def measure(
             "rg": rg,
         },
         "mass_within": [[float(rr), float(mm)] for rr, mm in zip(table_r, m, strict=True)],
+        "loops": loop_stats,
     }
