@@ -118,7 +118,7 @@ def build_run(args):
     ramp = Ramp.from_dict(r)
     for key in _RUN_KEYS:
         v = getattr(args, key)
-        if v not in (None, False):
+        if v is not None and v is not False:  # not `in (None, False)`: --workers 0 == False
             run[key] = v
     unknown = set(run) - set(_RUN_KEYS)
     if unknown:
