@@ -94,7 +94,7 @@ def test_sigint_keeps_finished_replicas(tmp_path):
     # replica 0 of a fast ramp finishes; the in-process loop is then stopped in replica 1
     proc = subprocess.Popen(
         [sys.executable, "-m", "crumple.cli", "run", "--out", str(tmp_path / "o"),
-         "--replicas", "3", "--workers", "1", "--n-segments", "200"],
+         "--replicas", "3", "--workers", "1", "--n-segments", "100"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )  # fmt: skip
     err = ""
