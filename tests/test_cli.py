@@ -162,7 +162,9 @@ def test_npy_of_non_reals_is_refused(capsys, tmp_path, array):
 
 
 @pytest.mark.parametrize(
-    "text", ["", "# only a comment\n", "1e400 0\n0 0\n1 0\n2 0\n"], ids=["empty", "comment", "overflow"]
+    "text",
+    ["", "# only a comment\n", "1e400 0\n0 0\n1 0\n2 0\n"],
+    ids=["empty", "comment", "overflow"],
 )
 def test_text_file_errors_print_no_numpy_warning(capsys, tmp_path, text):
     (tmp_path / "w.txt").write_text(text)
@@ -356,7 +358,9 @@ def test_export_round_trip_total_energy(capsys, tmp_path):
 
     d = tmp_path / "r"
     assert run_cli(capsys, "run", "--out", d, *RUN_SMALL)[0] == 0
-    code, _, err = run_cli(capsys, "export", d / "ramps.h5", "--stage", -1, "-o", tmp_path / "x.npy")
+    code, _, err = run_cli(
+        capsys, "export", d / "ramps.h5", "--stage", -1, "-o", tmp_path / "x.npy"
+    )
     assert code == 0, err
     code, out, err = run_cli(capsys, "energy", tmp_path / "x.npy", "--kb", 5, "--ks", 5e5,
                              "--lam", 70)  # fmt: skip

@@ -88,8 +88,9 @@ def test_sigint_stops_within_seconds_and_says_what_was_kept(tmp_path):
 
 def test_sigint_keeps_finished_replicas(tmp_path):
     """Replicas that finished before Ctrl-C are written, marked as such."""
-    import h5py
     import json
+
+    import h5py
 
     # replica 0 of a fast ramp finishes; the in-process loop is then stopped in replica 1
     proc = subprocess.Popen(

@@ -103,6 +103,8 @@ def test_python_blocks_run(path, stores, tmp_path, monkeypatch):
 def test_the_collector_sees_blocks_and_skips(tmp_path):
     readme = ROOT / "README.md"
     assert len(blocks(readme, "python")) >= 2 and blocks(readme, "bash")
-    text = "a\n<!-- skip-test: a probe -->\n```python\nraise SystemExit\n```\n```python\nx = 1\n```\n"
+    text = (
+        "a\n<!-- skip-test: a probe -->\n```python\nraise SystemExit\n```\n```python\nx = 1\n```\n"
+    )
     (tmp_path / "probe.md").write_text(text)
     assert [c for _, c in blocks(tmp_path / "probe.md", "python")] == ["x = 1\n"]

@@ -268,14 +268,19 @@ def _loglog_curves(ax, curves, *, marker="o", errors=None):
 
 def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
     """Rows of configurations: ``{row label: [(positions (n, 2), λ), ...]}`` (Fig. 2 and its
-    alternatives, one row each)."""
+    alternatives, one row each).
+
+    Axes are x and y in units of L0; the panels of a row share one scale, so the shrinking
+    with λ shows. End 0 is a blue circle, end N a red square, the trap centre (the origin) a
+    grey cross (legend below the panels)."""
     rows = {k: v for k, v in rows.items() if v}
     if not rows:
         raise ValueError("nothing to plot")
     ncols = max(len(v) for v in rows.values())
-    fig = Figure(figsize=(2.7 * ncols, 2.8 * len(rows) + 0.4), layout="constrained")
+    fig = Figure(figsize=(2.7 * ncols, 2.8 * len(rows) + 0.8), layout="constrained")
     axes = fig.subplots(len(rows), ncols, squeeze=False)
     for i, (label, panels) in enumerate(rows.items()):
+        half = 1.08 * max(float(np.max(np.abs(np.asarray(x)))) for x, _ in panels)
         for k in range(ncols):
             ax = axes[i, k]
             if k >= len(panels):
@@ -284,13 +289,18 @@ def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
             x, lam = panels[k]
             x = np.asarray(x)
             ax.plot(x[:, 0], x[:, 1], "-", color="0.15", lw=0.9)
-            ax.plot(*x[0], "o", ms=2.5, color="tab:blue")
-            ax.plot(*x[-1], "s", ms=2.5, color="tab:red")
-            ax.plot(0, 0, "+", ms=6, color="tab:gray")
-            ax.set_aspect("equal", adjustable="datalim")
+            ax.plot(*x[0], "o", ms=2.5, color="tab:blue", label="end 0 (first node)")
+            ax.plot(*x[-1], "s", ms=2.5, color="tab:red", label="end N (last node)")
+            ax.plot(0, 0, "+", ms=6, color="tab:gray", label="trap centre")
+            ax.set_xlim(-half, half)
+            ax.set_ylim(-half, half)
+            ax.set_aspect("equal", adjustable="box")
             ax.set_title(f"λ = {lam:g}", fontsize=9)
             ax.tick_params(labelsize=6)
-        axes[i, 0].set_ylabel(label, fontsize=9)
+            ax.set_xlabel("x / L0", fontsize=7, labelpad=1)
+        axes[i, 0].set_ylabel(f"{label}\ny / L0", fontsize=9)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize=7, frameon=False)
     if title:
         fig.suptitle(title, fontsize=10)
     return fig

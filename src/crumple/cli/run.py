@@ -68,7 +68,7 @@ _UNITS = {
 }
 
 
-class Terminated(BaseException):  # noqa: N818 (a signal, like KeyboardInterrupt)
+class Terminated(BaseException):
     """SIGTERM, raised in the main thread so that workers are stopped on the way out."""
 
 
@@ -478,6 +478,30 @@ def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int
     return code
 
 
+#: crumple run's flags beyond the wire's: (flag, type, help with default and units).
+_FLAGS = [
+    ("--n-segments", int, "number of segments N (default 100)"),
+    ("--rest-angle-sd", float, "imperfection: random rest angle per joint [rad] (default 0)"),
+    ("--length", float, "wire length L0 [length] (default 1)"),
+    ("--lambdas", str, "comma-separated λ stages [energy/length²] (default: 44 stages, "
+     "geometric 1 … 2000 plus 70, 200, 300, 1000)"),
+    ("--ftol", float, "equilibrium: largest node force [energy/length] (default 1e-6)"),
+    ("--maxiter", int, "budget per stage: Newton iterations (default 5000) or Powell sweeps "
+     f"(default {POWELL_MAXITER})"),
+    ("--max-step", float, "largest Newton node step [segment lengths] (default 0.5)"),
+    ("--initial-noise", float,
+     "transverse noise of the initial wire [segment lengths] (default 0.01)"),
+    ("--stage-noise", float, "random kick before every stage [segment lengths] (default 0)"),
+    ("--stop-tol", float, "stop when no node moves more than this [length] (default: never)"),
+    ("--replicas", int, "independent replicas (default 1)"),
+    ("--workers", int, "parallel processes, >= 1 (default: cores, at most one per replica)"),
+    ("--seed", int, "base seed (default 0)"),
+    ("--out", str, "output directory (default crumple-out)"),
+    ("--figure-lambdas", str,
+     "λ stages to draw (default: those of 70, 200, 300, 1000 in the ramp)"),
+]  # fmt: skip
+
+
 def register(sub) -> None:
     p = sub.add_parser(
         "run",
@@ -488,35 +512,13 @@ def register(sub) -> None:
     )
     p.add_argument("--config", help="TOML file with [wire], [ramp], [run] tables")
     add_model_flags(p, required=False)
-    p.add_argument("--n-segments", type=int, help="number of segments N (default 100)")
-    p.add_argument("--rest-angle-sd", type=float,
-                   help="imperfection: random rest angle per joint [rad] (default 0)")  # fmt: skip
-    p.add_argument("--length", type=float, help="wire length L0 [length] (default 1)")
-    p.add_argument("--lambdas",
-                   help="comma-separated λ stages [energy/length²] (default: 44 stages, "
-                   "geometric 1 … 2000 plus 70, 200, 300, 1000)")  # fmt: skip
+    for flag, kind, text in _FLAGS:
+        p.add_argument(flag, type=kind, help=text)
     p.add_argument("--method", choices=["newton", "powell"], help="minimiser (default newton)")
-    p.add_argument("--ftol", type=float,
-                   help="equilibrium: largest node force [energy/length] (default 1e-6)")  # fmt: skip
-    p.add_argument("--maxiter", type=int,
-                   help="budget per stage: Newton iterations (default 5000) or Powell sweeps "
-                   f"(default {POWELL_MAXITER})")  # fmt: skip
-    p.add_argument("--max-step", type=float,
-                   help="largest Newton node step [segment lengths] (default 0.5)")  # fmt: skip
-    p.add_argument("--initial-noise", type=float,
-                   help="transverse noise of the initial wire [segment lengths] (default 0.01)")  # fmt: skip
-    p.add_argument("--stage-noise", type=float,
-                   help="random kick before every stage [segment lengths] (default 0)")  # fmt: skip
-    p.add_argument("--stop-tol", type=float,
-                   help="stop when no node moves more than this [length] (default: never)")  # fmt: skip
-    p.add_argument("--replicas", type=int, help="independent replicas (default 1)")
-    p.add_argument("--workers", type=int,
-                   help="parallel processes, >= 1 (default: cores, at most one per replica)")  # fmt: skip
-    p.add_argument("--seed", type=int, help="base seed (default 0)")
-    p.add_argument("--out", help="output directory (default crumple-out)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing OUT/ramps.h5 (refused otherwise)")  # fmt: skip
-    p.add_argument("--figure-lambdas",
-                   help="λ stages to draw (default: those of 70, 200, 300, 1000 in the ramp)")  # fmt: skip
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing OUT/ramps.h5 (refused otherwise)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=cmd_run)
