@@ -171,11 +171,13 @@ def test_text_file_errors_print_no_numpy_warning(capsys, tmp_path, text):
     one_line_error(*run_cli(capsys, "energy", tmp_path / "w.txt", *E))
 
 
-def test_energy_that_overflows_is_refused(capsys, tmp_path):
+@pytest.mark.parametrize("scale", [1e160, 1e200, 1e307])
+@pytest.mark.parametrize("command", [("energy", *E), ("measure",)], ids=["energy", "measure"])
+def test_overflowing_positions_are_one_line(capsys, tmp_path, scale, command):
     t = np.linspace(0.3, 4 * np.pi, 31)
-    np.save(tmp_path / "big.npy", 1e200 * t[:, None] * np.c_[np.cos(t), np.sin(t)])
-    msg = one_line_error(*run_cli(capsys, "energy", tmp_path / "big.npy", *E))
-    assert "not finite" in msg
+    np.savetxt(tmp_path / "big.txt", scale * t[:, None] * np.c_[np.cos(t), np.sin(t)])
+    msg = one_line_error(*run_cli(capsys, command[0], tmp_path / "big.txt", *command[1:]))
+    assert "overflow" in msg
 
 
 def test_measure_warns_when_contact_distance_exceeds_segments(capsys, tmp_path):

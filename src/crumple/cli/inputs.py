@@ -120,6 +120,12 @@ def _read_xyz(path: Path) -> np.ndarray:
     return x
 
 
+#: Largest |coordinate| accepted [length]: squares of larger values overflow a double
+#: (sqrt(1.8e308) = 1.3e154), and the cell lists of the hard core stop working long before.
+#: Lengths are in units of the wire's rest length, so a wire is of order 1.
+MAX_COORDINATE = 1e150
+
+
 def read_positions(path) -> np.ndarray:
     """Node positions from a ``.npy`` array, an ``.xyz`` file or a text/CSV file of ``x y``
     rows.
@@ -128,7 +134,8 @@ def read_positions(path) -> np.ndarray:
     starting with ``#`` are comments. Refused, each with a one-line :class:`CLIError`: a
     missing or empty file, anything but real numbers (strings, complex, booleans, objects), a
     shape other than ``(n_nodes, 2)``, fewer than 4 nodes, NaN or infinite values (including
-    values that overflow a double). Reading never prints a NumPy warning.
+    values that overflow a double), coordinates beyond :data:`MAX_COORDINATE`. Reading never
+    prints a NumPy warning.
     """
     path = Path(path)
     if not path.is_file():
@@ -167,6 +174,12 @@ def read_positions(path) -> np.ndarray:
         raise CLIError(f"{path}: a wire needs at least 4 nodes (3 segments), got {x.shape[0]}")
     if not np.all(np.isfinite(x)):
         raise CLIError(f"{path}: positions contain NaN or infinite values")
+    big = float(np.abs(x).max())
+    if big > MAX_COORDINATE:
+        raise CLIError(
+            f"{path}: coordinates up to {big:.3g}: beyond {MAX_COORDINATE:g} their squares "
+            "overflow double precision; give lengths in units of the wire's length"
+        )
     return x
 
 
