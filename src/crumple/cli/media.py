@@ -82,6 +82,8 @@ def cmd_animate(args) -> int:
 
     from ..figures import ramp_animation
 
+    if not (0 < args.fps <= 100):
+        raise CLIError(f"--fps must be in (0, 100], got {args.fps:g}")
     out = Path(args.output)
     suffix = out.suffix.lower()
     if suffix == ".gif":
@@ -92,8 +94,6 @@ def cmd_animate(args) -> int:
         writer = animation.FFMpegWriter(fps=args.fps)
     else:
         raise CLIError(f"-o must end in .gif or .mp4, got {out.name!r}")
-    if not (0 < args.fps <= 100):
-        raise CLIError(f"--fps must be in (0, 100], got {args.fps:g}")
     res = read_results(args.file)
     r = replica_index(res, args.file, args.replica)
     n = int(res["n_stages"][r])
