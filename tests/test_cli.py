@@ -401,3 +401,21 @@ def test_plot_and_animate(capsys, tmp_path, ramp_file):
                         (("animate", ramp_file, "-o", tmp_path / "x.avi"), ".gif"),
                         (("animate", tmp_path / "none.h5"), "no such")]:  # fmt: skip
         assert match in one_line_error(*run_cli(capsys, *args))
+
+
+def test_run_with_worker_processes_matches_the_library(capsys, tmp_path):
+    """crumple run's own worker pool (stoppable, with per-stage progress) gives the replicas
+    of crumple.protocol.run_replicas, bit for bit."""
+    from crumple.protocol import Ramp, run_replicas
+    from crumple.storage import load_ramps
+
+    flags = ["--n-segments", 20, "--lambdas", "1,10,70", "--replicas", 3, "--workers", 2,
+             "--rest-angle-sd", 0.02, "--seed", 5, "--figure-lambdas", 70]  # fmt: skip
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path / "o", *flags)
+    assert code == 0, err
+    got = load_ramps(tmp_path / "o" / "ramps.h5")
+    want = run_replicas(Wire(k_b=5, k_s=5e5, n_segments=20, rest_angle_sd=0.02),
+                        Ramp(lambdas=(1, 10, 70)), n_replicas=3, seed=5, workers=1)  # fmt: skip
+    for g, w in zip(got, want, strict=True):
+        for sg, sw in zip(g.stages, w.stages, strict=True):
+            np.testing.assert_array_equal(sg.positions, sw.positions)
