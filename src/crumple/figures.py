@@ -55,9 +55,10 @@ def plot_configurations(
     """Wire configurations side by side, one panel per trap strength (the paper's Fig. 2).
 
     Axes are x and y in units of the rest length L0. The first node (end 0) is a blue
-    circle, the last (end N) a red square, the trap centre a grey cross; segments in contact
-    are drawn in orange. With ``common_scale`` every panel spans the same range (the shrinking
-    with λ shows); otherwise each panel is zoomed on its wire and carries a scale bar.
+    dot, the last (end N) a hollow red square, the trap centre a grey cross; segments in
+    contact are drawn in orange, and each panel's title gives the number of contact pairs.
+    With ``common_scale`` every panel spans the same range (the shrinking with λ shows);
+    otherwise each panel is zoomed on its wire and carries a scale bar.
 
     Parameters
     ----------
@@ -120,8 +121,10 @@ def plot_configurations(
             for i in segs:
                 ax.plot(x[i : i + 2, 0], x[i : i + 2, 1], "-", color="tab:orange", lw=2.6,
                         solid_capstyle="round", zorder=1.5)  # fmt: skip
-        ax.plot(*x[0], "o", ms=4, color="tab:blue", label="end 0 (first node)")
-        ax.plot(*x[-1], "s", ms=4, color="tab:red", label=f"end N = {len(x) - 1} (last node)")
+        # end N hollow and larger, end 0 on top: both stay visible when the ends touch
+        ax.plot(*x[-1], "s", ms=7, mfc="none", mec="tab:red", mew=1.5, zorder=3,
+                label=f"end N = {len(x) - 1} (last node)")  # fmt: skip
+        ax.plot(*x[0], "o", ms=4, color="tab:blue", zorder=4, label="end 0 (first node)")
         ax.plot(*c, "+", ms=7, color="tab:gray", label="trap centre")
         ax.set_aspect("equal", adjustable="datalim" if not common_scale else "box")
         if common_scale:
@@ -131,7 +134,7 @@ def plot_configurations(
             span = float(np.ptp(x, axis=0).max()) or 1.0
             _scale_bar(ax, span)
         label = f"({letters[k % 26]})  " if n > 1 else ""
-        extra = f", {len(pairs)} contact(s)" if contacts is not None else ""
+        extra = f", {len(pairs)} contact pair(s)" if contacts is not None else ""
         ax.set_title(f"{label}λ = {lam:g}{extra}", fontsize=10)
         ax.tick_params(labelsize=7)
         if k % ncols == 0 or not common_scale:
@@ -203,8 +206,8 @@ def ramp_animation(
     ax.set_ylabel("y / L0")
     ax.plot(*c, "+", ms=7, color="tab:gray")
     (wire,) = ax.plot([], [], "-", color="0.15", lw=1.0)
+    (end1,) = ax.plot([], [], "s", ms=7, mfc="none", mec="tab:red", mew=1.5, label="end N")
     (end0,) = ax.plot([], [], "o", ms=4, color="tab:blue", label="end 0")
-    (end1,) = ax.plot([], [], "s", ms=4, color="tab:red", label="end N")
     ax.legend(loc="upper right", fontsize=7, frameon=False)
     text = ax.text(0.02, 0.02, "", transform=ax.transAxes, fontsize=8, family="monospace",
                    va="bottom")  # fmt: skip
@@ -216,6 +219,9 @@ def ramp_animation(
         markers.append((ax_e.plot([], [], "o", ms=4, color=line.get_color())[0], e))
     ax_e.set_xscale("log")
     ax_e.set_yscale("log")
+    top = max((float(np.nanmax(e)) for _, e in markers if np.any(e > 0)), default=1.0)
+    # 8 decades: below, a straight wire's bending energy is round-off (~1e-30), not physics
+    ax_e.set_ylim(bottom=top * 1e-8, top=top * 3)
     ax_e.set_xlabel("trap strength λ")
     ax_e.set_ylabel("energy")
     ax_e.legend(fontsize=7, frameon=False, loc="center left", bbox_to_anchor=(1.0, 0.5))
@@ -271,8 +277,8 @@ def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
     alternatives, one row each).
 
     Axes are x and y in units of L0; the panels of a row share one scale, so the shrinking
-    with λ shows. End 0 is a blue circle, end N a red square, the trap centre (the origin) a
-    grey cross (legend below the panels)."""
+    with λ shows. End 0 is a blue dot, end N a hollow red square, the trap centre (the
+    origin) a grey cross (legend below the panels)."""
     rows = {k: v for k, v in rows.items() if v}
     if not rows:
         raise ValueError("nothing to plot")
@@ -289,8 +295,9 @@ def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
             x, lam = panels[k]
             x = np.asarray(x)
             ax.plot(x[:, 0], x[:, 1], "-", color="0.15", lw=0.9)
-            ax.plot(*x[0], "o", ms=2.5, color="tab:blue", label="end 0 (first node)")
-            ax.plot(*x[-1], "s", ms=2.5, color="tab:red", label="end N (last node)")
+            ax.plot(*x[-1], "s", ms=5, mfc="none", mec="tab:red", mew=1.2, zorder=3,
+                    label="end N (last node)")  # fmt: skip
+            ax.plot(*x[0], "o", ms=2.5, color="tab:blue", zorder=4, label="end 0 (first node)")
             ax.plot(0, 0, "+", ms=6, color="tab:gray", label="trap centre")
             ax.set_xlim(-half, half)
             ax.set_ylim(-half, half)
