@@ -402,6 +402,8 @@ def plot_loop_count(lam, n_loops, *, brackets=None, picture=None) -> Figure:
             a.axvspan(
                 br[0], br[1], color=color, alpha=0.2, label=f"{label}: ({br[0]:g}, {br[1]:g}]"
             )
+        else:
+            a.plot([], [], " ", label=f"{label}: none up to λ = {np.nanmax(lam):g}")
     a.axvline(1000.0, color="k", ls=":", lw=1, label="paper: contacts at λ ≥ 1000")
     a.set_xscale("log")
     a.set_xlabel("λ")
