@@ -18,6 +18,7 @@ Lengths are in units of L0, angles in radians (``docs/observables.md``).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -81,10 +82,19 @@ def _n_contacts_interior(x: np.ndarray, wire: Wire) -> float:
 
 
 def _loops(x: np.ndarray, wire: Wire) -> LoopStats | None:
-    """The loops at ``c = 2 d``; None for a wire that crosses itself (faces undefined)."""
+    """The loops at ``c = 2 d``; None for a wire that crosses itself (faces undefined).
+
+    Several entries read the same stage's loops: the last few are cached by content."""
+    x = np.ascontiguousarray(x, dtype=float)
+    return _loops_of(x.tobytes(), x.shape[0], CONTACT_FACTOR * wire.hard_core)
+
+
+@functools.lru_cache(maxsize=4)
+def _loops_of(data: bytes, n: int, c: float) -> LoopStats | None:
+    x = np.frombuffer(data, dtype=float).reshape(n, 2)
     if find_crossings(x).shape[0]:
         return None
-    return loops(x, contact_distance=CONTACT_FACTOR * wire.hard_core)
+    return loops(x, contact_distance=c)
 
 
 def _loop_number(what: Callable[[LoopStats], float]) -> Callable[[np.ndarray, Wire], float]:
