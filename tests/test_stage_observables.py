@@ -47,6 +47,14 @@ def test_straight_wire_and_closed_ring():
     assert all(np.isnan(v[k][1]) for k in so.OBSERVABLES)  # a stage not run
 
 
+def test_a_crossing_wire_has_no_loops_but_its_other_observables():
+    wire = Wire(k_b=5.0, k_s=5e5, n_segments=3)
+    bowtie = np.array([[0.0, 0.0], [0.3, 0.3], [0.3, 0.0], [0.0, 0.3]])  # segments 0 and 2 cross
+    v = so.compute(bowtie[None], wire)
+    assert np.isnan(v["n_loops"][0]) and np.isnan(v["loop_contacts"][0])
+    assert v["r_max"][0] > 0 and v["contacts"][0] == 1
+
+
 def test_gamma_is_nan_at_straight_stages_only():
     g = so.gamma([1e-6, 1.0, 2.0, 1.0], [1e-24, 4.0, 0.0, np.nan], [1e-10, 0.2, 0.5, 0.5])
     assert np.isnan(g[0]) and g[1] == 0.25 and np.isnan(g[2]) and np.isnan(g[3])

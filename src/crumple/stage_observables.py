@@ -82,7 +82,8 @@ def _n_contacts_interior(x: np.ndarray, wire: Wire) -> float:
 
 
 def _loops(x: np.ndarray, wire: Wire) -> LoopStats | None:
-    """The loops at ``c = 2 d``; None for a wire that crosses itself (faces undefined).
+    """The loops at ``c = 2 d``; None (NaN) for a wire that crosses itself or whose contact
+    graph round-off made non-plane (faces undefined).
 
     Several entries read the same stage's loops: the last few are cached by content."""
     x = np.ascontiguousarray(x, dtype=float)
@@ -94,7 +95,10 @@ def _loops_of(data: bytes, n: int, c: float) -> LoopStats | None:
     x = np.frombuffer(data, dtype=float).reshape(n, 2)
     if find_crossings(x).shape[0]:
         return None
-    return loops(x, contact_distance=c)
+    try:
+        return loops(x, contact_distance=c)
+    except RuntimeError:  # loops' refusal of a graph that round-off made non-plane: NaN, and
+        return None  # the run (hours of minimisation) is still stored
 
 
 def _loop_number(what: Callable[[LoopStats], float]) -> Callable[[np.ndarray, Wire], float]:
@@ -124,7 +128,7 @@ OBSERVABLES: MappingProxyType[str, StageObservable] = MappingProxyType(dict((
     _entry("contour_length", "length", "total length of the segments",
            lambda x, w: float(segment_lengths(x).sum())),
     _entry("n_loops", "1", "loops at contact distance 2 hard-core widths (NaN if the wire "
-           "crosses itself)", _loop_number(lambda s: s.count)),
+           "crosses itself: faces undefined)", _loop_number(lambda s: s.count)),
     _entry("n_loops_nested", "1", "loops enclosed by another loop (depth >= 1)",
            _loop_number(lambda s: int(np.count_nonzero(s.depth >= 1)))),
     _entry("loop_contacts", "1", "contact links at which two different loops touch "
