@@ -223,6 +223,40 @@ def test_gaps_between_the_nodes_of_pressed_strands_are_not_loops():
     assert loops(x, contact_distance=C, min_width=C).count == 9
 
 
+def two_rings(*, touch: bool = True, n: int = 120) -> np.ndarray:
+    """Two rings side by side, each closed by an end of the wire touching where the wire enters
+    it, joined by a bridge below them; with ``touch`` they touch each other at the origin
+    (0.5 C apart), which also closes a third loop between them and the bridge."""
+    r = 1.0 - (0.25 * C if touch else 0.2)
+
+    def ring(cx: float) -> np.ndarray:
+        phi = -np.pi / 2 + 2 * np.pi * np.arange(n + 1) / n
+        x = np.c_[cx + r * np.cos(phi), r * np.sin(phi)]
+        side = x[0] - x[n - 1]
+        x[n] = x[0] - 0.3 * C * side / np.linalg.norm(side)  # stops 0.3 C before its start
+        return x
+
+    a, b = ring(-1.0), ring(1.0)
+    return np.r_[a, [[a[-1, 0], -1.3], [0.0, -1.3], [1.0, -1.3]], b]
+
+
+def test_loops_touching_loops_are_the_contacts_between_two_different_loops():
+    apart = loops(two_rings(touch=False), contact_distance=C)
+    assert apart.count == 2 and apart.n_loop_contacts == 0  # two necks, each within one loop
+    x = two_rings()
+    assert not has_crossings(x)
+    st_ = loops(x, contact_distance=C)
+    assert st_.count == 3 and st_.counts_by_depth == (3,)
+    assert st_.n_loop_contacts >= 1  # the links at the origin, between the two rings
+    for y in (x[::-1], rotate(x, 0.7) + 5.0):
+        assert loops(y, contact_distance=C).n_loop_contacts == st_.n_loop_contacts
+    # a lone loop, a water drop, a spiral's turns (each contact borders one loop and the
+    # outside, or the same loop on both sides): no loop touches another
+    for y in (polygon_ring(40), drop(), snail(2), packed_spiral(2)):
+        assert loops(y, contact_distance=C).n_loop_contacts == 0
+    assert st_.to_dict()["loop_contacts"] == st_.n_loop_contacts
+
+
 def test_random_self_avoiding_wire_without_contacts_has_no_loop():
     rng = np.random.default_rng(7)
     found = 0

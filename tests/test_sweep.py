@@ -20,6 +20,7 @@ import crumple
 from crumple.cli import main
 from crumple.model import Plasticity, Wire
 from crumple.protocol import Ramp, replica_seeds, run_replicas
+from crumple.stage_observables import STRAIGHT
 from crumple.storage import save_ramps, verify_ramps
 from crumple.sweep import (
     IncompleteSweepWarning,
@@ -415,7 +416,10 @@ def test_load_gives_a_labelled_dataset(reference, small):
         np.testing.assert_array_equal(one["iterations"], f["solver/iterations"][0])
         assert one["converged"].values.tolist() == f["solver/converged"][0].tolist()
         gamma = f["energy/stretching"][0] / f["energy/bending"][0]
-        np.testing.assert_array_equal(one["gamma"], gamma)
+        straight = f["observables/max_turning_angle"][0] < STRAIGHT
+        assert straight[0] and not straight[-1]  # γ at the straight first stage is NaN
+        np.testing.assert_array_equal(one["gamma"], np.where(straight, np.nan, gamma))
+        np.testing.assert_array_equal(one["n_loops"], f["observables/n_loops"][0])
         pos = crumple.load(reference, positions=True)["positions"]
         assert pos.dims == ("k_b", "s", "replica", "lam", "node", "xy")
         np.testing.assert_array_equal(pos.sel(k_b=2.0, s=1.0, replica=1), f["positions"][0])

@@ -526,3 +526,88 @@ def plot_minimizer(lam, energy_excess, force_powell, force_newton, *, ftol=1e-6)
     _panel_letter(a, 0)
     _panel_letter(b, 1)
     return fig
+
+
+def plot_loop_count(lam, n_loops, *, brackets=None, picture=None) -> Figure:
+    """The number of loops against λ (a) and a wire with its loops numbered (b).
+
+    Parameters
+    ----------
+    lam : array_like, shape (S,)
+        The stages.
+    n_loops : array_like, shape (R, S)
+        Loops per replica and stage (NaN where no stage).
+    brackets : dict, optional
+        label → (λ_lo, λ_hi) or None: onsets drawn as shaded bands ``(λ_lo, λ_hi]``.
+    picture : dict, optional
+        ``positions`` (n, 2), ``boundaries`` (loop polygons), ``depth``, ``centroid``,
+        ``links`` (n_links, 2, 2), ``lam``: panel (b), each loop filled in its own colour
+        (hatched when nested, depth >= 1) and numbered 1…n (largest first), every contact link
+        marked by a red dot (the links are far shorter than the line width); without it, (b)
+        is hidden.
+
+    Examples
+    --------
+    >>> fig = plot_loop_count([1.0, 10.0, 100.0], [[0, 1, 3]])
+    >>> len([ax for ax in fig.axes if ax.get_visible()])
+    1
+    """
+    from matplotlib.patches import Polygon
+    from matplotlib.ticker import MaxNLocator
+
+    fig = Figure(figsize=(10.5, 4.6), layout="constrained")
+    a, b = fig.subplots(1, 2, width_ratios=(1, 1.15))
+    lam = np.asarray(lam, float)
+    n = np.atleast_2d(np.asarray(n_loops, float))
+    for r, nr in enumerate(n):
+        ok = np.isfinite(nr)
+        a.plot(lam[ok], nr[ok], "o-", ms=3, lw=1, alpha=0.5 if n.shape[0] > 1 else 1.0,
+               color="tab:blue", label="replicas" if r == 0 else None)  # fmt: skip
+    if n.shape[0] > 1:
+        ok = np.isfinite(n)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = np.where(ok, n, 0.0).sum(axis=0) / ok.sum(axis=0)
+        a.plot(lam, mean, "k-", lw=2, label="mean over replicas")
+    for (label, br), color in zip((brackets or {}).items(), ("tab:red", "tab:gray"), strict=False):
+        if br is not None:
+            a.axvspan(
+                br[0], br[1], color=color, alpha=0.2, label=f"{label}: ({br[0]:g}, {br[1]:g}]"
+            )
+        else:
+            a.plot([], [], " ", label=f"{label}: none up to λ = {np.nanmax(lam):g}")
+    a.axvline(1000.0, color="k", ls=":", lw=1, label="paper: contacts at λ ≥ 1000")
+    a.set_xscale("log")
+    a.set_xlabel("λ")
+    a.set_ylabel("number of loops n")
+    a.yaxis.set_major_locator(MaxNLocator(integer=True))
+    a.legend(fontsize=7, loc="upper left")
+    _panel_letter(a, 0)
+    if picture is None:
+        b.set_visible(False)
+        return fig
+    x = np.asarray(picture["positions"])
+    depth = np.asarray(picture["depth"])
+    cycle = [f"C{k}" for k in range(10)]
+    for k, (poly, d) in enumerate(zip(picture["boundaries"], depth, strict=True)):
+        b.add_patch(Polygon(poly, closed=True, fc=cycle[k % 10], ec="none", alpha=0.4,
+                            hatch="///" if d >= 1 else None))  # fmt: skip
+        cx, cy = picture["centroid"][k]
+        b.annotate(str(k + 1), (cx, cy), ha="center", va="center", fontsize=9, weight="bold")
+    b.plot(x[:, 0], x[:, 1], "-", color="0.1", lw=1)
+    links = np.asarray(picture["links"]).reshape(-1, 2, 2)
+    if links.shape[0]:
+        mid = links.mean(axis=1)
+        b.plot(mid[:, 0], mid[:, 1], "o", color="red", ms=3, label="contacts (links)")
+    b.plot(*x[0], "o", color="tab:blue", ms=4, label="wire ends")
+    b.plot(*x[-1], "o", color="tab:blue", ms=4)
+    b.set_aspect("equal", adjustable="datalim")
+    b.set_xlabel("x [L0]")
+    b.set_ylabel("y [L0]")
+    nested = int(np.count_nonzero(depth >= 1))
+    b.set_title(
+        f"λ = {picture['lam']:g}: {len(depth)} loops, numbered ({nested} nested, hatched)",
+        fontsize=9,
+    )
+    b.legend(fontsize=7, loc="lower right")
+    _panel_letter(b, 1)
+    return fig

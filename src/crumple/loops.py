@@ -96,6 +96,11 @@ class LoopStats:
         Centroid of each loop's face ``[length]``.
     n_links : int
         Contact links in the graph (after the planarity rules).
+    n_loop_contacts : int
+        Contact links at which two loops touch: each end of the link lies on the boundary of a
+        loop that does not reach the other end (the strands in contact border two different
+        loops on their far sides; the neck of a lone water drop, whose drop reaches both ends,
+        does not count). ``docs/observables.md``, "Loops touching loops".
     n_slivers : int
         Bounded faces narrower than ``min_width`` (inside contacts; not loops).
     boundaries : tuple of ndarray or None
@@ -113,6 +118,7 @@ class LoopStats:
     centroid: np.ndarray
     n_links: int
     n_slivers: int
+    n_loop_contacts: int = 0
     boundaries: tuple | None = None
     links: np.ndarray | None = None
 
@@ -165,6 +171,7 @@ class LoopStats:
             "min_width": self.min_width,
             "count": self.count,
             "counts_by_depth": list(self.counts_by_depth),
+            "loop_contacts": self.n_loop_contacts,
             "area": summary,
         }
 
@@ -791,6 +798,39 @@ def loops(
     return _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, boundaries)
 
 
+def _loop_contacts(face, nf, org, is_loop, a, b) -> int:
+    """Number of links ``a[i] - b[i]`` at which two loops touch (:class:`LoopStats`).
+
+    The loops around a vertex are the faces of its outgoing half-edges. A link counts when some
+    loop around ``a`` is not around ``b`` and some loop around ``b`` is not around ``a``. O(E).
+    """
+    n_l = a.shape[0]
+    on_loop = is_loop[face]
+    if n_l == 0 or not on_loop.any():
+        return 0
+    pairs = np.unique(org[on_loop] * nf + face[on_loop])  # (vertex, loop), sorted by vertex
+    v_of, f_of = pairs // nf, pairs % nf
+    ends = np.r_[a, b]
+    lo = np.searchsorted(v_of, ends, side="left")
+    cnt = np.searchsorted(v_of, ends, side="right") - lo
+    which = np.repeat(np.arange(2 * n_l), cnt)  # one row per (link end, loop around it)
+    offset = np.arange(which.shape[0]) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    loop = f_of[lo[which] + offset]
+    link = which % n_l
+    side = np.where(which < n_l, 1, 2)  # bit 1: around a; bit 2: around b
+    key = link * nf + loop
+    order = np.argsort(key, kind="stable")
+    key, side = key[order], side[order]
+    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    mask = np.bitwise_or.reduceat(side, start) if start.shape[0] else side
+    grp_link = key[start] // nf
+    a_only = np.zeros(n_l, dtype=bool)
+    b_only = np.zeros(n_l, dtype=bool)
+    a_only[grp_link[mask == 1]] = True
+    b_only[grp_link[mask == 2]] = True
+    return int(np.count_nonzero(a_only & b_only))
+
+
 def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopStats:
     n = pos.shape[0]
     ns = n - 1
@@ -887,6 +927,7 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
         width = np.where(perim_all > 0, 2.0 * area / perim_all, 0.0)
     is_loop = bounded & (width >= w)
     depth, n_contacts = _depths(face, nf, nxt, is_link, is_loop, bounded & ~is_loop, vx, vy, org)
+    n_loop_contacts = _loop_contacts(face, nf, org, is_loop, l_org, l_dst)
     ids = np.flatnonzero(is_loop)
     ids = ids[np.lexsort((cy[ids], cx[ids], -area[ids]))]
     bnd = None
@@ -914,6 +955,7 @@ def _faces(pos, lk, lj, lt, lo, fx, fy, c, w, n_links, want_boundaries) -> LoopS
         centroid=_frozen(np.c_[cx[ids], cy[ids]], float),
         n_links=n_links,
         n_slivers=int(np.count_nonzero(bounded & ~is_loop)),
+        n_loop_contacts=n_loop_contacts,
         boundaries=bnd,
         links=(
             _frozen(np.stack([np.c_[vx[l_org], vy[l_org]], np.c_[vx[l_dst], vy[l_dst]]], 1), float)

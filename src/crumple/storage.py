@@ -19,6 +19,9 @@ dataset                               shape              meaning
                                                          ``hessian_evaluations``
 ``solver/message``                    (R, S)             why the minimiser stopped (UTF-8)
 ``rest_angles`` (imperfect wires)     (R, n - 2)         each replica's quenched rest angles
+``observables/<name>`` (optional)     (R, S)             per-stage observables (a sweep's run
+                                                         files: :mod:`crumple.stage_observables`),
+                                                         attributes ``units`` and ``doc``
 ====================================  =================  ======================================
 
 Root attributes: ``format`` (``"crumple-ramps"``), ``format_version``, ``wire`` and ``ramp`` (the
@@ -101,7 +104,14 @@ def _jsonable_seed(seed):
     return repr(seed)
 
 
-def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None = None) -> Path:
+def save_ramps(
+    path,
+    results: list[RampResult],
+    *,
+    seed=None,
+    attrs: dict | None = None,
+    observables: dict | None = None,
+) -> Path:
     """Write the replicas of one ramp to an HDF5 file, atomically.
 
     Parameters
@@ -114,6 +124,9 @@ def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None
         The base seed, stored for provenance.
     attrs : dict, optional
         Extra JSON-able root attributes.
+    observables : dict, optional
+        name → ``(values, meta)``: per-stage values of shape (R, S) (NaN where no stage) and
+        a dict of string attributes (``units``, ``doc``), written to ``observables/<name>``.
 
     Returns
     -------
@@ -176,6 +189,17 @@ def save_ramps(path, results: list[RampResult], *, seed=None, attrs: dict | None
                     if a is not None:
                         ra[r] = a
                 f.create_dataset("rest_angles", data=ra)
+            if observables:
+                g = f.create_group("observables")
+                for name, (values, meta) in observables.items():
+                    v = np.asarray(values, dtype=float)
+                    if v.shape != (n_rep, n_stage):
+                        raise ValueError(
+                            f"observable {name!r} has shape {v.shape}, not {(n_rep, n_stage)}"
+                        )
+                    d = g.create_dataset(name, data=v)
+                    for k, text in (meta or {}).items():
+                        d.attrs[k] = str(text)
             f.attrs["complete"] = True  # last: only a file written to the end carries it
     return path
 
@@ -249,6 +273,12 @@ def _check_layout(f, path) -> None:
                 ok = sizes.setdefault(dim, size) == size
             if not ok:
                 raise ValueError(f"{path}: dataset {name!r} has inconsistent shape {obj.shape}")
+    obs = f.get("observables")
+    if obs is not None:  # optional (files before it, and files of `crumple run`, lack it)
+        want = (sizes["R"], sizes["S"])
+        for name, obj in obs.items():
+            if not isinstance(obj, h5py.Dataset) or obj.shape != want:
+                raise ValueError(f"{path}: observables/{name} is not an array of shape {want}")
 
 
 def verify_ramps(path, *, run_id: str | None = None, read_data: bool = False) -> dict:
@@ -297,8 +327,9 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
     """The arrays of a verified ramp file, as a dict of NumPy arrays, without building objects.
 
     Keys: ``lambda`` (S,), ``n_stages``, ``seconds`` (R,), ``energy/<term>`` and
-    ``solver/<field>`` (R, S) (``solver/message`` as str), ``positions`` (R, S, n, 2) when
-    asked for, and ``attrs`` (the root attributes, JSON-decoded). Raises ``ValueError`` for a
+    ``solver/<field>`` (R, S) (``solver/message`` as str), ``observables/<name>`` (R, S) for
+    each per-stage observable the file holds, ``positions`` (R, S, n, 2) when asked for, and
+    ``attrs`` (the root attributes, JSON-decoded). Raises ``ValueError`` for a
     file :func:`verify_ramps` rejects or whose data cannot be read: never returns partial data.
     """
     attrs = verify_ramps(path, run_id=run_id)
@@ -310,6 +341,8 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
                     continue
                 ds = f[name]
                 out[name] = ds.asstr()[()] if name == "solver/message" else ds[()]
+            for name, ds in f.get("observables", {}).items():
+                out[f"observables/{name}"] = ds[()]
     except (OSError, KeyError, RuntimeError) as exc:
         raise ValueError(f"{path} is damaged ({exc})") from None
     return out

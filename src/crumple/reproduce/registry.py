@@ -27,6 +27,7 @@ from typing import Any
 from . import (
     alternatives,
     fig2_configurations,
+    fig2_loops,
     fig3_mass_size,
     fig4_gamma,
     fig5_radius,
@@ -45,6 +46,7 @@ SECTIONS: tuple[ModuleType, ...] = (
     fig5_radius,
     fig6_plasticity,
     fig2_configurations,
+    fig2_loops,
     loop_shape,
     minimizer,
     alternatives,

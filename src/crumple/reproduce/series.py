@@ -1,9 +1,10 @@
 """The stage-level results of one experiment's store (:class:`Series`) and the measures that
 every section applies to them: α (R_g ~ λ^α), D_M at one stage, local slopes, convergence.
 
-:func:`_series` reads a store (:func:`crumple.sweep.load`) and computes, at every stage of
-every run, the observables the sections share: ``r_max``, the RMS radius, contacts, the
-largest turning angle, the contour length and γ = E_s/E_b. Nothing here simulates.
+:func:`_series` reads a store (:func:`crumple.sweep.load`) with the observables the sweep
+stored at every stage of every run (:mod:`crumple.stage_observables`): ``r_max``, the RMS
+radius, contacts, the largest turning angle, the contour length, the loops, and γ = E_s/E_b
+(NaN at straight stages, the convention ``load`` applies). Nothing here simulates.
 """
 
 from __future__ import annotations
@@ -18,16 +19,19 @@ import numpy as np
 
 from .. import paper
 from ..fit import fit_power_law
-from ..geometry import close_segment_pairs, segment_lengths, turning_angles
-from ..observables import mass_size_exponent, r_max, radius_of_gyration
+from ..observables import mass_size_exponent
+from ..stage_observables import CONTACT_FACTOR, END_FRACTION, OBSERVABLES, STRAIGHT, is_straight
 from .common import Estimate, _combine, _f
 
-#: A contact: two non-adjacent segments closer than this many hard-core widths.
-CONTACT_FACTOR = 2.0
-#: Contacts "between loops": both segments at least this fraction of the wire from its ends.
-END_FRACTION = 0.1
-#: A wire whose joints all turn by less than this [rad] is straight (γ undefined).
-STRAIGHT = 1e-3
+__all__ = ["CONTACT_FACTOR", "END_FRACTION", "LAM_FIG3", "STRAIGHT", "Series"]
+
+#: Older names under which the sections read three of the stored observables (``Series.obs``
+#: holds every entry of :data:`crumple.stage_observables.OBSERVABLES` under its own name too).
+_ALIASES = {
+    "rms": "radius_of_gyration",
+    "max_angle": "max_turning_angle",
+    "length": "contour_length",
+}
 #: The stage of Fig. 3 (and of the D_M rows).
 LAM_FIG3 = 1000.0
 
@@ -106,44 +110,14 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
         incomplete=incomplete,
         hard_core=hard_core,
     )
-    n_p, n_r, n_l = s.positions.shape[:3]
-    rm = np.full((n_p, n_r, n_l), np.nan)
-    rg = np.full_like(rm, np.nan)
-    contacts = np.full_like(rm, np.nan)
-    max_angle = np.full_like(rm, np.nan)
-    length = np.full_like(rm, np.nan)
-    interior = np.full_like(rm, np.nan)
-    for p in range(n_p):
-        for r in range(n_r):
-            for j in range(n_l):
-                if not s.valid(p, r, j):
-                    continue
-                x = s.positions[p, r, j]
-                rm[p, r, j] = r_max(x)
-                rg[p, r, j] = radius_of_gyration(x)
-                pairs, _ = close_segment_pairs(x, CONTACT_FACTOR * s.hard_core)
-                contacts[p, r, j] = pairs.shape[0]
-                m = max(1, int(END_FRACTION * (x.shape[0] - 1)))
-                far = (pairs.min(axis=1) >= m) & (pairs.max(axis=1) < x.shape[0] - 1 - m)
-                interior[p, r, j] = int(far.sum())
-                max_angle[p, r, j] = np.abs(turning_angles(x)).max()
-                length[p, r, j] = segment_lengths(x).sum()
-    s.obs.update(
-        r_max=rm,
-        rms=rg,
-        contacts=contacts,
-        contacts_interior=interior,
-        max_angle=max_angle,
-        length=length,
-    )
+    s.obs.update({k: ds[k].values for k in OBSERVABLES})
+    s.obs.update({k: s.obs[v] for k, v in _ALIASES.items()})
     # γ = E_s/E_b is the energy split of a *bent* wire; on a straight wire (every joint
     # straighter than STRAIGHT rad: the start of a ramp, or a soft wire that collapses into a
-    # compressed rod) E_b is round-off and γ is undefined: NaN, counted in the report.
-    s.obs["straight"] = max_angle < STRAIGHT
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eb = s.energies["bending"]
-        g = np.where(eb > 0, s.energies["stretching"] / eb, np.nan)
-    s.obs["gamma"] = np.where(s.obs["straight"], np.nan, g)
+    # compressed rod) E_b is round-off and γ is undefined: NaN (load's ``gamma``), counted in
+    # the report.
+    s.obs["straight"] = is_straight(s.obs["max_angle"])
+    s.obs["gamma"] = ds["gamma"].values
     return s
 
 

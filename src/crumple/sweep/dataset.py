@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from .. import stage_observables
+from ..model import Wire
 from ..storage import read_arrays
 from .store import _h5, _read_manifest
 
@@ -38,9 +40,23 @@ def load(path, *, positions: bool = False):
     Data variables over all of them: ``E_bending``, ``E_stretching``, ``E_confinement``,
     ``E_hard_core``, ``E_total`` ``[energy]``, ``gamma`` (E_s/E_b), ``converged`` (bool),
     ``max_force`` ``[energy/length]``, ``iterations``, ``evaluations``,
-    ``hessian_evaluations`` (float, NaN where no stage); per run (no ``lam``): ``done``,
+    ``hessian_evaluations`` (float, NaN where no stage), and every per-stage observable of
+    :data:`crumple.stage_observables.OBSERVABLES` (``r_max``, ``radius_of_gyration``,
+    ``contacts``, ``contacts_interior``, ``max_turning_angle``, ``contour_length``,
+    ``n_loops``, ``n_loops_nested``, ``loop_contacts``; float, NaN where no stage; their
+    ``units`` and ``doc`` in the variable's attributes); per run (no ``lam``): ``done``,
     ``seconds``, ``n_stages``, ``run_id``. With ``positions=True``, ``positions`` (…,
     ``replica``, ``lam``, ``node``, ``xy``) ``[length]``, NaN-padded when N is swept.
+
+    ``gamma`` is NaN where it is undefined: at a straight stage (every joint turns by less
+    than :data:`crumple.stage_observables.STRAIGHT` rad, where E_b is round-off and E_s/E_b
+    would read 1e15-1e21), where E_b = 0, and where there is no stage. This is the report's
+    convention (:func:`crumple.stage_observables.gamma`, one definition for both).
+
+    The observables are computed once, when a run is executed, and read from its file. A run
+    file written before an observable existed (an older store) lacks it: ``load`` computes
+    it from the stored positions (the same function, so the same numbers), and counts such
+    runs in the attribute ``observables_computed_on_load``.
 
     Runs that are missing, failed or whose file is damaged are NaN (``done`` false) and an
     :class:`IncompleteSweepWarning` says how many; a damaged file is never read as data.
@@ -66,11 +82,11 @@ def load(path, *, positions: bool = False):
     n_rep = int(m["replicas"])
     run_shape = (*shape, n_rep)
     stage_shape = (*run_shape, len(lam))
-    data, per_run, pos_arrays, bad = _read_runs(out, m, lam, run_shape, positions)
+    data, per_run, pos_arrays, bad, recomputed = _read_runs(out, m, lam, run_shape, positions)
     done, seconds, n_stages, ids = per_run
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eb, es = data["E_bending"], data["E_stretching"]
-        data["gamma"] = np.where(eb > 0, es / np.where(eb > 0, eb, 1.0), np.nan)
+    data["gamma"] = stage_observables.gamma(
+        data["E_stretching"], data["E_bending"], data["max_turning_angle"]
+    )
     sdims = (*names, "replica", "lam")
     rdims = (*names, "replica")
     variables = {k: (sdims, v) for k, v in data.items()}
@@ -90,13 +106,16 @@ def load(path, *, positions: bool = False):
     coords["replica"] = np.arange(n_rep)
     coords["lam"] = lam
     ds = xr.Dataset(variables, coords=coords)
-    ds["gamma"].attrs["long_name"] = "E_stretching / E_bending"
+    ds["gamma"].attrs["long_name"] = "E_stretching / E_bending (NaN at straight stages)"
+    for k, o in stage_observables.OBSERVABLES.items():
+        ds[k].attrs.update(units=o.units, doc=o.doc)
     ds["lam"].attrs["long_name"] = "trap strength λ of the stage"
     ds.attrs.update(
         store=str(out),
         sweep=json.dumps(m["sweep"]),
         runs=len(m["runs"]),
         runs_done=int(done.sum()),
+        observables_computed_on_load=recomputed,
     )
     if bad:
         warnings.warn(
@@ -117,6 +136,9 @@ def _read_runs(out: Path, m: dict, lam: np.ndarray, run_shape: tuple, positions:
     data["max_force"] = np.full(stage_shape, np.nan)
     for c in _COUNTS:
         data[c] = np.full(stage_shape, np.nan)
+    for k in stage_observables.OBSERVABLES:
+        data[k] = np.full(stage_shape, np.nan)
+    recomputed = 0
     done = np.zeros(run_shape, dtype=bool)
     seconds = np.full(run_shape, np.nan)
     n_stages = np.zeros(run_shape, dtype=np.int64)
@@ -149,9 +171,33 @@ def _read_runs(out: Path, m: dict, lam: np.ndarray, run_shape: tuple, positions:
         data["converged"][(*at, j)] = a["solver/converged"][0] & ran
         for c in _COUNTS:
             data[c][(*at, j)] = np.where(ran, a[f"solver/{c}"][0], np.nan)
+        obs, computed = _observables(h5, rid, a)
+        recomputed += computed
+        for k, v in obs.items():
+            data[k][(*at, j)] = v
         done[at] = True
         seconds[at] = a["seconds"][0]
         n_stages[at] = a["n_stages"][0]
         if positions:
             pos_arrays[at] = (j, a["positions"][0])
-    return data, (done, seconds, n_stages, ids), pos_arrays, bad
+    return data, (done, seconds, n_stages, ids), pos_arrays, bad, recomputed
+
+
+def _observables(h5: Path, rid: str, a: dict) -> tuple[dict[str, np.ndarray], bool]:
+    """The per-stage observables of one run file (replica 0): read where stored, computed
+    from its positions where the file predates them. Returns (name → (S,), any computed)."""
+    out = {}
+    for k in stage_observables.OBSERVABLES:
+        v = a.get(f"observables/{k}")
+        if v is not None:
+            out[k] = v[0]
+    missing = [k for k in stage_observables.OBSERVABLES if k not in out]
+    if missing:
+        pos = (
+            a["positions"]
+            if "positions" in a
+            else read_arrays(h5, positions=True, run_id=rid)["positions"]
+        )
+        wire = Wire.from_dict(a["attrs"]["wire"])
+        out.update(stage_observables.compute(pos[0], wire, missing))
+    return out, bool(missing)

@@ -23,6 +23,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
+import numpy as np
+
+from .. import stage_observables
 from ..storage import atomic_write_text, save_ramps
 from .spec import Sweep
 from .store import (
@@ -89,6 +92,7 @@ def execute_run(task: Mapping, out: str) -> dict:
                 "coords": task.get("coords", {}),
                 "host": socket.gethostname(),
             },
+            observables=_stage_observables(result),
         )
     except Exception as exc:  # recorded, with its traceback, for `crumple status`
         _record_failure(
@@ -106,6 +110,19 @@ def execute_run(task: Mapping, out: str) -> dict:
         }
     _failed(out_path, rid).unlink(missing_ok=True)
     return {"id": rid, "status": "done", "seconds": result.seconds, "converged": result.converged}
+
+
+def _stage_observables(result) -> dict:
+    """Every entry of :data:`crumple.stage_observables.OBSERVABLES` at every stage of the
+    ramp, as ``save_ramps`` stores them: name → (values (1, S), {units, doc})."""
+    pos = np.full((len(result.ramp.lambdas), result.wire.n_nodes, 2), np.nan)
+    for s, st in enumerate(result.stages):
+        pos[s] = st.positions
+    values = stage_observables.compute(pos, result.wire)
+    meta = stage_observables.OBSERVABLES
+    return {
+        k: (v[None, :], {"units": meta[k].units, "doc": meta[k].doc}) for k, v in values.items()
+    }
 
 
 @dataclass(frozen=True, slots=True)
