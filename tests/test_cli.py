@@ -1,12 +1,13 @@
 """The command line: outputs match the library, every bad input is one line and exit != 0."""
 
 import json
+from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from crumple.cli import main
+from crumple.cli import main, read_positions
 from crumple.energy import energy_terms
 from crumple.model import Plasticity, Wire
 from crumple.observables import measure
@@ -123,3 +124,280 @@ def test_run_writes_results_and_figure(capsys, tmp_path):
         assert f["positions"].shape == (2, 3, 31, 2)
         assert json.loads(f.attrs["wire"])["n_segments"] == 30
     assert (tmp_path / "o" / "configurations.png").stat().st_size > 1000
+
+
+# --------------------------------------------------------------------------------------------
+# Issue 15: what a new user and a fuzzer found
+# --------------------------------------------------------------------------------------------
+
+
+def one_line_error(code, out, err):
+    assert code != 0
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("crumple: error:"), err
+    return lines[0]
+
+
+E = ("--kb", 5, "--ks", 5e5, "--lam", 1)
+
+
+def test_energy_coincident_nodes_is_one_line(capsys, tmp_path):
+    x = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.0], [0.2, 0.05], [0.3, 0.0]])
+    np.save(tmp_path / "c.npy", x)
+    msg = one_line_error(*run_cli(capsys, "energy", tmp_path / "c.npy", *E))
+    assert "nodes 1 and 2 coincide" in msg
+
+
+@pytest.mark.parametrize(
+    "array",
+    [np.array([["0", "0"], ["0", "0"], ["1", "0"], ["2", "0"]]),
+     np.array([["a", "b"]] * 5), np.ones((5, 2)) * (1 + 1j), np.ones((5, 2), bool)],
+    ids=["numeric-strings", "strings", "complex", "bool"],
+)  # fmt: skip
+def test_npy_of_non_reals_is_refused(capsys, tmp_path, array):
+    np.save(tmp_path / "s.npy", array)
+    msg = one_line_error(*run_cli(capsys, "energy", tmp_path / "s.npy", *E))
+    assert "real numbers" in msg
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["", "# only a comment\n", "1e400 0\n0 0\n1 0\n2 0\n"],
+    ids=["empty", "comment", "overflow"],
+)
+def test_text_file_errors_print_no_numpy_warning(capsys, tmp_path, text):
+    (tmp_path / "w.txt").write_text(text)
+    one_line_error(*run_cli(capsys, "energy", tmp_path / "w.txt", *E))
+
+
+@pytest.mark.parametrize("scale", [1e160, 1e200, 1e307])
+@pytest.mark.parametrize("command", [("energy", *E), ("measure",)], ids=["energy", "measure"])
+def test_overflowing_positions_are_one_line(capsys, tmp_path, scale, command):
+    t = np.linspace(0.3, 4 * np.pi, 31)
+    np.savetxt(tmp_path / "big.txt", scale * t[:, None] * np.c_[np.cos(t), np.sin(t)])
+    msg = one_line_error(*run_cli(capsys, command[0], tmp_path / "big.txt", *command[1:]))
+    assert "overflow" in msg
+
+
+def test_measure_warns_when_contact_distance_exceeds_segments(capsys, tmp_path):
+    x = np.c_[np.linspace(0, 5e-5, 11), np.zeros(11)]  # segments 5e-6 < the default 1e-5
+    np.save(tmp_path / "fine.npy", x)
+    code, out, err = run_cli(capsys, "measure", tmp_path / "fine.npy")
+    assert code == 0 and "warning" in err and "--contact-distance" in err
+    assert json.loads(out)["contacts"] > 0  # what the warning is about
+    code, out, err = run_cli(capsys, "measure", tmp_path / "fine.npy", "--contact-distance", 1e-6)
+    assert code == 0 and err == "" and json.loads(out)["contacts"] == 0
+
+
+RUN_BAD = [
+    (("--workers", "0"), "--workers must be >= 1"),
+    (("--workers", "-2"), "--workers must be >= 1"),
+    (("--replicas", "0"), "replicas must be >= 1"),
+    (("--figure-lambdas", "70,123"), "figure λ 123 not among"),
+    (("--lambdas", "-5,10"), "lambdas must be finite and >= 0"),
+    (("--lambdas", "-5"), "lambdas must be finite and >= 0"),
+    (("--plastic-s", "0.5"), "needs both"),
+]
+
+
+@pytest.mark.parametrize("flags,match", RUN_BAD, ids=[" ".join(f) for f, _ in RUN_BAD])
+def test_run_refuses_before_simulating(capsys, tmp_path, monkeypatch, flags, match):
+    import crumple.cli.run as clirun
+
+    def boom(*a, **k):
+        raise AssertionError("simulated before validating")
+
+    monkeypatch.setattr(clirun, "run_all", boom)
+    msg = one_line_error(*run_cli(capsys, "run", "--out", tmp_path / "o", *flags))
+    assert match in msg
+    assert not (tmp_path / "o").exists()
+
+
+def test_run_toml_replicas_must_be_whole(capsys, tmp_path):
+    cfg = tmp_path / "r.toml"
+    cfg.write_text("[run]\nreplicas = 2.0\n")
+    assert "replicas" in one_line_error(*run_cli(capsys, "run", "--config", cfg))
+
+
+def test_negative_list_values_parse():
+    from crumple.cli import build_parser
+    from crumple.cli.inputs import join_negative_values
+
+    args = build_parser().parse_args(join_negative_values(["run", "--lambdas", "-5,10"]))
+    assert args.lambdas == "-5,10"
+    args = build_parser().parse_args(
+        join_negative_values(["energy", "f", "--kb", "1", "--ks", "1", "--lam", "1",
+                              "--center", "-0.1,0.2"]))  # fmt: skip
+    assert args.center == "-0.1,0.2"
+
+
+RUN_SMALL = ("--n-segments", 20, "--lambdas", "1,10,70", "--figure-lambdas", "70", "--quiet")
+
+
+def test_run_never_overwrites_without_flag(capsys, tmp_path):
+    out = tmp_path / "o"
+    code, _, err = run_cli(capsys, "run", "--out", out, "--kb", 5, *RUN_SMALL)
+    assert code == 0, err
+    with h5py.File(out / "ramps.h5") as f:
+        assert json.loads(f.attrs["wire"])["k_b"] == 5
+    msg = one_line_error(*run_cli(capsys, "run", "--out", out, "--kb", 8, *RUN_SMALL))
+    assert "--overwrite" in msg
+    with h5py.File(out / "ramps.h5") as f:
+        assert json.loads(f.attrs["wire"])["k_b"] == 5  # untouched
+    code, _, err = run_cli(capsys, "run", "--out", out, "--kb", 8, "--overwrite", *RUN_SMALL)
+    assert code == 0, err
+    with h5py.File(out / "ramps.h5") as f:
+        assert json.loads(f.attrs["wire"])["k_b"] == 8
+
+
+@pytest.mark.parametrize("fail_at", [1, 2])
+def test_run_outputs_never_mismatch_after_a_kill(capsys, tmp_path, monkeypatch, fail_at):
+    """A kill between the renames leaves no new results beside the old figure (nor the
+    reverse): the old figure is removed first, then results, then the new figure."""
+    import crumple.cli.run as clirun
+
+    out = tmp_path / "o"
+    assert run_cli(capsys, "run", "--out", out, "--kb", 5, *RUN_SMALL)[0] == 0
+    old_png = (out / "configurations.png").read_bytes()
+    calls = []
+    real = clirun.os.replace
+
+    def replace(a, b):
+        if Path(b).name in ("ramps.h5", "configurations.png"):  # not save_ramps' own rename
+            calls.append(b)
+            if len(calls) == fail_at:
+                raise KeyboardInterrupt  # the kill
+        return real(a, b)
+
+    monkeypatch.setattr(clirun.os, "replace", replace)
+    code = main(["run", "--out", str(out), "--kb", "8", "--overwrite", *map(str, RUN_SMALL)])
+    assert code == 130
+    with h5py.File(out / "ramps.h5") as f:
+        k_b = json.loads(f.attrs["wire"])["k_b"]
+    png = out / "configurations.png"
+    assert not png.exists() or (k_b == 5 and png.read_bytes() == old_png)
+    assert k_b == (5 if fail_at == 1 else 8)
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary left
+
+
+def test_powell_has_its_own_budget_and_shows_stages(capsys, tmp_path):
+    from crumple.cli import build_parser
+    from crumple.cli.run import POWELL_MAXITER, build_run
+
+    args = build_parser().parse_args(["run", "--method", "powell"])
+    assert build_run(args)[1].maxiter == POWELL_MAXITER
+    args = build_parser().parse_args(["run", "--method", "powell", "--maxiter", "3"])
+    assert build_run(args)[1].maxiter == 3
+    assert build_run(build_parser().parse_args(["run"]))[1].maxiter == 5000  # Newton's
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path / "p", "--method", "powell",
+                           "--n-segments", 8, "--lambdas", "1,2", "--maxiter", 2)  # fmt: skip
+    assert code in (0, 3), err
+    assert "stage 1/2" in err and "maxiter = 2" in err
+
+
+def test_run_echoes_every_parameter_and_warns_on_identical_replicas(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "run", "--out", tmp_path / "o", "--n-segments", 20,
+                             "--lambdas", "1,10", "--replicas", 2, "--workers", 1,
+                             "--plastic-s", 0.3, "--plastic-theta", 0.2)  # fmt: skip
+    assert code == 0, err
+    from crumple.model import Wire as W
+
+    for key in W.__dataclass_fields__:
+        assert f"{key} = " in err, key
+    assert "s = 0.3" in err and "theta_p [rad] = 0.2" in err
+    assert "rest_angle_sd" in err.split("warning:")[1]
+    assert json.loads(out)["wire"]["plasticity"] == {"s": 0.3, "theta_p": 0.2}
+
+
+def test_help_shows_defaults_and_units(capsys):
+    for cmd in ("run", "energy", "measure", "export", "plot", "animate"):
+        with pytest.raises(SystemExit):
+            main([cmd, "--help"])
+        text = capsys.readouterr().out
+        assert "default" in text, cmd
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for unit in ("[energy]", "[length]", "[energy/length]", "[rad]", "[segment lengths]"):
+        assert unit in text, unit
+
+
+@pytest.fixture(scope="module")
+def ramp_file(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ramp")
+    code = main(["run", "--out", str(d), "--n-segments", "24", "--lambdas", "1,10,70,200",
+                 "--replicas", "2", "--workers", "1", "--rest-angle-sd", "0.01", "--kb", "3",
+                 "--plastic-s", "0.5", "--plastic-theta", "0.2", "--quiet"])  # fmt: skip
+    assert code == 0
+    return d / "ramps.h5"
+
+
+@pytest.mark.parametrize("fmt", ["npy", "csv", "xyz"])
+def test_export_then_energy_round_trip(capsys, tmp_path, ramp_file, fmt):
+    from crumple.storage import load_ramps
+
+    capsys.readouterr()
+    dest = tmp_path / f"w.{fmt}"
+    code, _, err = run_cli(capsys, "export", ramp_file, "--lam", 70, "--replica", 1, "-o", dest)
+    assert code == 0, err
+    stage = load_ramps(ramp_file)[1].at(70.0)
+    np.testing.assert_array_equal(read_positions(dest), stage.positions)
+    # the export prints the crumple energy line that recomputes the stored energy
+    line = err.split("energy: ")[1].rstrip(")\n")
+    args = line.split()[3:]  # after "crumple energy PATH"
+    code, out, err = run_cli(capsys, "energy", dest, *args)
+    assert code == 0, err
+    got = json.loads(out)
+    # an imperfect wire's rest angles are not a flag of crumple energy: compare the terms that
+    # do not see them, and the total of a perfect wire below
+    for k in ("stretching", "confinement", "hard_core"):
+        assert got[k] == pytest.approx(getattr(stage.energy, k), rel=1e-12, abs=1e-300), k
+
+
+def test_export_round_trip_total_energy(capsys, tmp_path):
+    from crumple.storage import load_ramps
+
+    d = tmp_path / "r"
+    assert run_cli(capsys, "run", "--out", d, *RUN_SMALL)[0] == 0
+    code, _, err = run_cli(
+        capsys, "export", d / "ramps.h5", "--stage", -1, "-o", tmp_path / "x.npy"
+    )
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "energy", tmp_path / "x.npy", "--kb", 5, "--ks", 5e5,
+                             "--lam", 70)  # fmt: skip
+    assert code == 0, err
+    want = load_ramps(d / "ramps.h5")[0].stages[-1].energy
+    assert json.loads(out)["total"] == pytest.approx(want.total, rel=1e-12)
+
+
+def test_export_to_stdout_and_bad_choices(capsys, ramp_file):
+    code, out, err = run_cli(capsys, "export", ramp_file, "--format", "xyz")
+    assert code == 0 and out.splitlines()[0] == "25"
+    for bad, match in [(("--lam", 5, "--format", "csv"), "no stage at λ = 5"),
+                       (("--replica", 7, "--format", "csv"), "2 replica(s)"),
+                       (("--stage", 9, "--format", "csv"), "4 stages"), ((), "--format"),
+                       (("--format", "npy"), "-o FILE.npy")]:  # fmt: skip
+        code, out, err = run_cli(capsys, "export", ramp_file, *bad)
+        assert match in one_line_error(code, out, err)
+
+
+def test_plot_and_animate(capsys, tmp_path, ramp_file):
+    from PIL import Image
+
+    code, _, err = run_cli(capsys, "plot", ramp_file, "--lam", "10,200", "-o", tmp_path / "p.png")
+    assert code == 0, err
+    with Image.open(tmp_path / "p.png") as im:
+        assert im.size[0] > 500
+    code, _, err = run_cli(capsys, "plot", ramp_file, "--stage", 0, "--own-scale",
+                           "-o", tmp_path / "q.svg")  # fmt: skip
+    assert code == 0, err
+    code, _, err = run_cli(capsys, "animate", ramp_file, "-o", tmp_path / "a.gif", "--fps", 10)
+    assert code == 0, err
+    with Image.open(tmp_path / "a.gif") as im:
+        assert im.n_frames == 4
+    for args, match in [(("plot", ramp_file, "--lam", 3), "no stage"),
+                        (("plot", ramp_file, "-o", tmp_path / "x.txt"), ".png"),
+                        (("animate", ramp_file, "-o", tmp_path / "x.avi"), ".gif"),
+                        (("animate", tmp_path / "none.h5"), "no such")]:  # fmt: skip
+        assert match in one_line_error(*run_cli(capsys, *args))

@@ -15,7 +15,8 @@ dataset                               shape              meaning
                                                          hard_core, total [energy]
 ``solver/converged``                  (R, S)             equilibrium reached (max force <= ftol)
 ``solver/max_force``                  (R, S)             largest node force at the end
-``solver/iterations``, ``evaluations``, ``hessian_evaluations``  (R, S)
+``solver/<count>``                    (R, S)             ``iterations``, ``evaluations``,
+                                                         ``hessian_evaluations``
 ``solver/message``                    (R, S)             why the minimiser stopped (UTF-8)
 ``rest_angles`` (imperfect wires)     (R, n - 2)         each replica's quenched rest angles
 ====================================  =================  ======================================

@@ -1,0 +1,524 @@
+"""``crumple run``: one quasi-static ramp, its replicas, and their results on disk.
+
+What it guarantees:
+
+* every parameter is validated, and echoed, before anything is simulated (figure λs
+  included);
+* an existing ``OUT/ramps.h5`` is never replaced without ``--overwrite``;
+* the outputs are published consistently: both are written to temporary names first, then
+  the old figure is removed, the new results renamed into place, the new figure last. A kill
+  at any point leaves the old pair, the old results without a figure, the new results without
+  a figure, or the new pair, never results beside another run's figure (``crumple plot``
+  redraws a missing figure);
+* Ctrl-C or SIGTERM stops every worker process within seconds and says what was kept (the
+  replicas that had finished are written, marked ``interrupted``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
+
+__all__ = ["POWELL_MAXITER", "cmd_run", "register"]
+
+#: Powell's default budget per stage in ``crumple run``, in sweeps over all directions (the
+#: full reproduction's setting; ~4 s per stage at N = 100). ``Ramp.maxiter``'s default (5000)
+#: counts Newton iterations and would let Powell run for hours.
+POWELL_MAXITER = 20
+#: Contacts drawn on the figure: segments closer than this many hard-core widths (as in the
+#: reproduction report).
+CONTACT_FACTOR = 2.0
+
+_WIRE_KEYS = {
+    "kb": "k_b",
+    "ks": "k_s",
+    "n_segments": "n_segments",
+    "length": "length",
+    "confinement": "confinement",
+    "hard_core": "hard_core",
+    "hard_core_energy": "hard_core_energy",
+    "rest_angle_sd": "rest_angle_sd",
+}
+_RAMP_KEYS = ("initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step")
+_RUN_KEYS = ("replicas", "seed", "workers", "out", "figure_lambdas", "overwrite")
+#: Units of the echoed parameters (lengths in units of L0, energies in the paper's units).
+_UNITS = {
+    "k_b": "[energy]",
+    "k_s": "[energy/length²]",
+    "length": "[length]",
+    "hard_core": "[length]",
+    "hard_core_energy": "[energy]",
+    "rest_angle_sd": "[rad]",
+    "trap_center": "[length]",
+    "ftol": "[energy/length]",
+    "stop_tol": "[length]",
+    "initial_noise": "[segment lengths]",
+    "stage_noise": "[segment lengths]",
+    "max_step": "[segment lengths]",
+}
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that workers are stopped on the way out."""
+
+
+def build_run(args):
+    """Wire, Ramp and run options from the TOML file overridden by the flags."""
+    from ..model import Plasticity, Wire
+    from ..protocol import Ramp, default_schedule
+
+    cfg = load_toml(args.config) if args.config else {}
+    w = dict(cfg.get("wire", {}))
+    r = dict(cfg.get("ramp", {}))
+    run = dict(cfg.get("run", {}))
+    for flag, key in _WIRE_KEYS.items():
+        v = getattr(args, flag)
+        if v is not None:
+            w[key] = v
+    if args.plastic_s is not None or args.plastic_theta is not None:
+        w["plasticity"] = {"s": args.plastic_s, "theta_p": args.plastic_theta}
+        if None in w["plasticity"].values():
+            raise CLIError("plasticity needs both --plastic-s and --plastic-theta")
+    unknown = set(w) - set(Wire.__dataclass_fields__) - {"young", "radius", "bending", "stretching"}
+    if unknown:
+        raise CLIError(f"unknown [wire] key(s): {', '.join(sorted(unknown))}")
+    if isinstance(w.get("plasticity"), dict):
+        w["plasticity"] = Plasticity(**w["plasticity"])
+    if "young" in w or "radius" in w:
+        wire = Wire.from_material(**w)
+    elif "bending" in w or "stretching" in w:
+        wire = Wire.from_continuum(**w)
+    else:
+        w.setdefault("k_b", 5.0)
+        w.setdefault("k_s", 5e5)
+        wire = Wire(**w)
+    for key in _RAMP_KEYS:
+        v = getattr(args, key)
+        if v is not None:
+            r[key] = v
+    if r.get("method") == "powell" and "maxiter" not in r:
+        r["maxiter"] = POWELL_MAXITER
+    if args.lambdas is not None:
+        r["lambdas"] = floats(args.lambdas, "--lambdas")
+    elif "lambdas" not in r:
+        sched = r.pop("schedule", {})
+        if not isinstance(sched, dict):
+            raise CLIError("[ramp] schedule must be a table (lam_min, lam_max, n)")
+        r["lambdas"] = default_schedule(**sched)
+    ramp = Ramp.from_dict(r)
+    for key in _RUN_KEYS:
+        v = getattr(args, key)
+        if v is not None and v is not False:  # not `in (None, False)`: --workers 0 == False
+            run[key] = v
+    unknown = set(run) - set(_RUN_KEYS)
+    if unknown:
+        raise CLIError(f"unknown [run] key(s): {', '.join(sorted(unknown))}")
+    run["replicas"] = positive_int(run.get("replicas", 1), "replicas")
+    if run.get("workers") is not None:
+        run["workers"] = positive_int(run["workers"], "--workers")
+    seed = run.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise CLIError(f"seed must be a whole number >= 0, got {seed!r}")
+    run["figure_lambdas"] = _figure_lambdas(run.get("figure_lambdas"), ramp)
+    return wire, ramp, run
+
+
+def _figure_lambdas(value, ramp) -> list[float]:
+    """The λs to draw, each one of the ramp's stages: checked before anything is simulated."""
+    from ..protocol import PAPER_LAMBDAS
+
+    if value is None:
+        return [v for v in PAPER_LAMBDAS if v in ramp.lambdas] or [ramp.lambdas[-1]]
+    if isinstance(value, str):
+        wanted = floats(value, "--figure-lambdas")
+    else:
+        try:
+            wanted = [float(v) for v in value]
+        except (TypeError, ValueError):
+            raise CLIError(f"figure_lambdas must be a list of numbers, got {value!r}") from None
+    stages = np.asarray(ramp.lambdas)
+    out, missing = [], []
+    for lam in wanted:
+        hit = np.flatnonzero(np.isclose(stages, lam, rtol=1e-9, atol=0.0))
+        (out.append(float(stages[hit[0]])) if hit.size else missing.append(lam))
+    if missing or not out:
+        raise CLIError(
+            f"figure λ {', '.join(f'{v:g}' for v in missing) or '(none)'} not among the ramp's "
+            f"stages ({', '.join(f'{v:g}' for v in ramp.lambdas)}); add them to --lambdas"
+        )
+    return out
+
+
+def describe(wire, ramp, run, workers: int) -> str:
+    """Every parameter the run uses, with units: what ``crumple run`` echoes."""
+
+    def fmt(d, skip=()):
+        parts = []
+        for k, v in d.items():
+            if k in skip:
+                continue
+            if isinstance(v, dict):
+                v = ", ".join(f"{a} = {b:g}" for a, b in v.items())
+                v = f"{{{v}}}"
+            elif isinstance(v, float):
+                v = f"{v:g}"
+            elif isinstance(v, list | tuple):
+                v = "(" + ", ".join(f"{a:g}" for a in v) + ")"
+            parts.append(f"{k} = {v}" + (f" {_UNITS[k]}" if k in _UNITS else ""))
+        return ", ".join(parts)
+
+    wd = wire.to_dict()
+    if wd.get("plasticity") is None:
+        wd["plasticity"] = "none (elastic)"
+    else:
+        wd["plasticity"] = {"s": wire.plasticity.s, "theta_p [rad]": wire.plasticity.theta_p}
+    lams = ramp.lambdas
+    return (
+        f"crumple run:\n  wire: {fmt(wd)}\n"
+        f"  ramp: {len(lams)} stages, λ = {lams[0]:g} … {lams[-1]:g} [energy/length²], "
+        f"{fmt(ramp.to_dict(), skip=('lambdas',))}\n"
+        f"  run: {run['replicas']} replica(s) on {workers} worker(s), seed = {run.get('seed', 0)}, "
+        f"out = {run.get('out', 'crumple-out')}, figure λ = "
+        f"{', '.join(f'{v:g}' for v in run['figure_lambdas'])}"
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Progress
+# --------------------------------------------------------------------------------------------
+
+
+class Progress:
+    """Stages and replicas done, on stderr: one rewritten line on a terminal, else a line at
+    most every ``every`` seconds, and one line per finished replica."""
+
+    def __init__(self, quiet: bool, n_replicas: int, n_stages: int, every: float = 5.0):
+        self.quiet, self.every = quiet, every
+        self.n_rep, self.n_stages = n_replicas, n_stages
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.perf_counter()
+        self.last = -math.inf
+        self.stages_done: dict[int, int] = {}
+        self.not_converged = 0
+        self.replicas_done = 0
+
+    def _write(self, line: str, force: bool = False) -> None:
+        if self.quiet:
+            return
+        if self.tty:
+            sys.stderr.write(f"\r{line}   ")
+        elif force or time.monotonic() - self.last >= self.every:
+            self.last = time.monotonic()
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+    def stage(self, r: int, i: int, lam: float, converged: bool) -> None:
+        self.stages_done[r] = i + 1
+        self.not_converged += not converged
+        done = sum(self.stages_done.values())
+        total = self.n_rep * self.n_stages
+        elapsed = time.perf_counter() - self.t0
+        eta = elapsed / done * (total - done) if done else math.nan
+        bad = f", {self.not_converged} NOT converged" if self.not_converged else ""
+        self._write(
+            f"  stage {done}/{total} (replica {r}: λ = {lam:.4g}){bad}, "
+            f"{self.replicas_done}/{self.n_rep} replica(s) done, {elapsed:.0f} s elapsed, "
+            f"~{eta:.0f} s left"
+        )
+
+    def replica(self, r: int, result) -> None:
+        self.replicas_done += 1
+        self.stages_done[r] = self.n_stages  # an early stop counts as all its stages
+        bad = len(result.failed_stages)
+        note = "all stages converged" if not bad else f"{bad} stage(s) NOT converged"
+        elapsed = time.perf_counter() - self.t0
+        if self.tty and not self.quiet:
+            sys.stderr.write("\r")
+        self._write(
+            f"  replica {r} done ({self.replicas_done}/{self.n_rep}): {len(result.stages)} "
+            f"stages, {note}  [{elapsed:.1f} s elapsed]" + (" " * 10 if self.tty else ""),
+            force=True,
+        )
+        if self.tty and not self.quiet:
+            sys.stderr.write("\n")
+
+
+# --------------------------------------------------------------------------------------------
+# Replicas, in this process or in worker processes that a signal stops
+# --------------------------------------------------------------------------------------------
+
+_QUEUE = None
+
+
+def _init_worker(queue) -> None:
+    """Worker start: Ctrl-C goes to the parent only (which then stops the workers)."""
+    global _QUEUE
+    _QUEUE = queue
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _replica(wire, ramp, seed_seq, r: int, on_stage=None):
+    from ..protocol import run_ramp
+
+    def progress(i, n, stage):
+        msg = (r, i, stage.lam, stage.result.converged)
+        if on_stage is not None:
+            on_stage(*msg)
+        elif _QUEUE is not None:
+            _QUEUE.put(msg)
+
+    # as crumple.protocol.run_replicas: replica r uses SeedSequence(seed).spawn(n)[r]
+    return run_ramp(wire, ramp, seed=np.random.default_rng(seed_seq), progress=progress)
+
+
+def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, done: dict) -> None:
+    """Run the replicas, filling ``done[r]`` as each finishes. With several workers, worker
+    processes report every stage through a queue; on any exception (KeyboardInterrupt,
+    :class:`Terminated`) they are terminated before it propagates."""
+    from ..protocol import replica_seeds
+
+    seeds = replica_seeds(seed, n_rep)
+    if workers == 1:
+        for r in range(n_rep):
+            done[r] = _replica(wire, ramp, seeds[r], r, on_stage=prog.stage)
+            prog.replica(r, done[r])
+        return
+    import multiprocessing as mp
+    import queue as queue_mod
+
+    # forkserver/spawn: never fork a process that holds threads (numba, BLAS)
+    ctx = mp.get_context("spawn" if sys.platform != "linux" else "forkserver")
+    q = ctx.Queue()
+    pool = ctx.Pool(workers, initializer=_init_worker, initargs=(q,))
+    try:
+        pending = {r: pool.apply_async(_replica, (wire, ramp, seeds[r], r)) for r in range(n_rep)}
+        while pending:
+            try:
+                while True:
+                    prog.stage(*q.get(timeout=0.2))
+            except queue_mod.Empty:
+                pass
+            for r in [r for r, a in pending.items() if a.ready()]:
+                done[r] = pending.pop(r).get()
+                prog.replica(r, done[r])
+    except BaseException:
+        pool.terminate()  # SIGTERM to every worker, then joined: none is left running
+        raise
+    else:
+        pool.close()
+    finally:
+        pool.join()
+        q.close()
+        q.join_thread()
+
+
+# --------------------------------------------------------------------------------------------
+# Publishing the outputs
+# --------------------------------------------------------------------------------------------
+
+
+def _fsync(path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def draw(results, wire, lambdas, *, replica: int = 0):
+    """The Fig. 2-style figure of one replica at ``lambdas`` (those it reached)."""
+    from ..figures import plot_configurations
+    from ..geometry import close_segment_pairs
+
+    first = results[0]
+    shown = [lam for lam in lambdas if any(s.lam == lam for s in first.stages)]
+    if not shown:  # stopped early (stop_tol) before every figure λ
+        shown = [first.stages[-1].lam]
+    xs = [first.at(lam).positions for lam in shown]
+    d = CONTACT_FACTOR * wire.hard_core
+    plast = (
+        ""
+        if wire.plasticity is None
+        else f", plastic s = {wire.plasticity.s:g}, θ_p = {wire.plasticity.theta_p:g}"
+    )
+    return plot_configurations(
+        xs,
+        shown,
+        title=f"k_b = {wire.k_b:g}, k_s = {wire.k_s:g}, N = {wire.n_segments} "
+        f"({wire.confinement} confinement{plast}), replica {replica}",
+        trap_center=wire.trap_center,
+        contacts=[close_segment_pairs(x, d)[0] for x in xs],
+        contact_distance=d,
+    )
+
+
+def publish(out: Path, results, *, seed, fig, attrs=None) -> tuple[Path, Path]:
+    """Write ``ramps.h5`` and ``configurations.png`` so that they always match (module
+    docstring)."""
+    from ..storage import save_ramps
+
+    h5, png = out / "ramps.h5", out / "configurations.png"
+    tag = f"{os.getpid()}.tmp"
+    tmp_png, tmp_h5 = out / f".configurations.{tag}.png", out / f".ramps.{tag}.h5"
+    try:
+        fig.savefig(tmp_png, dpi=130)
+        _fsync(tmp_png)
+        save_ramps(tmp_h5, results, seed=seed, attrs=attrs)  # flushed to disk by save_ramps
+        png.unlink(missing_ok=True)  # 1. the old figure: no moment shows it beside new results
+        os.replace(tmp_h5, h5)  # 2. the new results
+        os.replace(tmp_png, png)  # 3. their figure
+        _fsync(out)
+    finally:
+        tmp_png.unlink(missing_ok=True)
+        tmp_h5.unlink(missing_ok=True)
+    return h5, png
+
+
+# --------------------------------------------------------------------------------------------
+# The command
+# --------------------------------------------------------------------------------------------
+
+
+def _warn(msg: str) -> None:
+    print(f"crumple: warning: {msg}", file=sys.stderr)
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated
+
+
+def cmd_run(args) -> int:
+    wire, ramp, run = build_run(args)
+    n_rep = run["replicas"]
+    seed = run.get("seed", 0)
+    out = Path(run.get("out", "crumple-out"))
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    workers = min(n_rep, cores) if run.get("workers") is None else min(run["workers"], n_rep)
+    if (out / "ramps.h5").exists() and not run.get("overwrite"):
+        raise CLIError(
+            f"{out / 'ramps.h5'} exists: pass --overwrite to replace it, or choose another --out"
+        )
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"--out {out} exists and is not a directory")
+    if not args.quiet:
+        print(describe(wire, ramp, run, workers), file=sys.stderr)
+    if n_rep > 1 and wire.rest_angle_sd == 0 and ramp.stage_noise == 0:
+        _warn(
+            f"{n_rep} replicas of a perfect wire (rest_angle_sd = 0, stage_noise = 0) follow "
+            "nearly the same path, whatever their initial noise (docs/model.md); for an "
+            "ensemble give the wire imperfections, e.g. --rest-angle-sd 0.01"
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    prog = Progress(args.quiet, n_rep, len(ramp.lambdas))
+    done: dict = {}
+    main_thread = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
+    t0 = time.perf_counter()
+    try:
+        run_all(wire, ramp, n_rep, seed, workers, prog, done)
+    except (KeyboardInterrupt, Terminated) as exc:
+        return _interrupted(exc, out, done, n_rep, wire, seed, run)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, old)
+    elapsed = time.perf_counter() - t0
+    results = [done[r] for r in range(n_rep)]
+    fig = draw(results, wire, run["figure_lambdas"])
+    h5, png = publish(out, results, seed=seed, fig=fig)
+    failed = [(r, lam, msg) for r, res in enumerate(results) for lam, msg in res.failed_stages]
+    summary = {
+        "results": str(h5),
+        "figure": str(png),
+        "replicas": n_rep,
+        "stages": len(ramp.lambdas),
+        "seconds": round(elapsed, 3),
+        "converged": not failed,
+        "failed_stages": [{"replica": r, "lambda": lam, "message": m} for r, lam, m in failed],
+        "wire": wire.to_dict(),
+        "ramp": {k: v for k, v in ramp.to_dict().items() if k != "lambdas"},
+        "final_energy": [res.stages[-1].energy.to_dict() for res in results],
+    }
+    print(json.dumps(summary, indent=2))
+    return 0 if not failed else 3
+
+
+def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int:
+    """After Ctrl-C or SIGTERM: the workers are stopped; keep the finished replicas."""
+    what = "terminated" if isinstance(exc, Terminated) else "interrupted"
+    code = 143 if isinstance(exc, Terminated) else 130
+    sys.stderr.write("\n" if sys.stderr.isatty() else "")
+    if not done:
+        print(
+            f"crumple: {what}: no replica had finished, nothing was written "
+            f"(files in {out} are unchanged)",
+            file=sys.stderr,
+        )
+        return code
+    kept = sorted(done)
+    results = [done[r] for r in kept]
+    fig = draw(results, wire, run["figure_lambdas"], replica=kept[0])
+    h5, _ = publish(out, results, seed=seed, fig=fig,
+                    attrs={"interrupted": True, "replica_ids": kept})  # fmt: skip
+    print(
+        f"crumple: {what}: kept the {len(kept)} finished replica(s) of {n_rep} "
+        f"(replica ids {kept}) in {h5}, marked 'interrupted'; rerun with --overwrite for all",
+        file=sys.stderr,
+    )
+    return code
+
+
+#: crumple run's flags beyond the wire's: (flag, type, help with default and units).
+_FLAGS = [
+    ("--n-segments", int, "number of segments N (default 100)"),
+    ("--rest-angle-sd", float, "imperfection: random rest angle per joint [rad] (default 0)"),
+    ("--length", float, "wire length L0 [length] (default 1)"),
+    ("--lambdas", str, "comma-separated λ stages [energy/length²] (default: 44 stages, "
+     "geometric 1 … 2000 plus 70, 200, 300, 1000)"),
+    ("--ftol", float, "equilibrium: largest node force [energy/length] (default 1e-6)"),
+    ("--maxiter", int, "budget per stage: Newton iterations (default 5000) or Powell sweeps "
+     f"(default {POWELL_MAXITER})"),
+    ("--max-step", float, "largest Newton node step [segment lengths] (default 0.5)"),
+    ("--initial-noise", float,
+     "transverse noise of the initial wire [segment lengths] (default 0.01)"),
+    ("--stage-noise", float, "random kick before every stage [segment lengths] (default 0)"),
+    ("--stop-tol", float, "stop when no node moves more than this [length] (default: never)"),
+    ("--replicas", int, "independent replicas (default 1)"),
+    ("--workers", int, "parallel processes, >= 1 (default: cores, at most one per replica)"),
+    ("--seed", int, "base seed (default 0)"),
+    ("--out", str, "output directory (default crumple-out)"),
+    ("--figure-lambdas", str,
+     "λ stages to draw (default: those of 70, 200, 300, 1000 in the ramp)"),
+]  # fmt: skip
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "run",
+        help="run a quasi-static confinement ramp",
+        description="Run a quasi-static confinement ramp (and its replicas); write "
+        "OUT/ramps.h5 and OUT/configurations.png. Lengths are in units of L0, energies in the "
+        "paper's units. Flags override the TOML file; every parameter is echoed before the run.",
+    )
+    p.add_argument("--config", help="TOML file with [wire], [ramp], [run] tables")
+    add_model_flags(p, required=False)
+    for flag, kind, text in _FLAGS:
+        p.add_argument(flag, type=kind, help=text)
+    p.add_argument("--method", choices=["newton", "powell"], help="minimiser (default newton)")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing OUT/ramps.h5 (refused otherwise)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=cmd_run)
