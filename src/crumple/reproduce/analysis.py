@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..paper import Profile
 from . import registry
 from .common import Context, Record, _jsonable
 from .series import Series, _convergence, _series
@@ -75,7 +76,21 @@ def _read_profile(out: Path) -> dict:
             f"{out} holds no reproduction ({PROFILE_FILE} missing); run `crumple reproduce "
             f"--out {out}` first"
         )
-    return json.loads(path.read_text())
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path} is not valid JSON ({exc})") from None
+    prof = meta.get("profile") if isinstance(meta, dict) else None
+    lacks = (
+        ["profile"] if not isinstance(prof, dict)
+        else [f"profile.{k}" for k in Profile.__dataclass_fields__ if k not in prof]
+    )  # fmt: skip
+    if lacks:
+        raise ValueError(
+            f"{path} is damaged (no {', '.join(lacks)}); rerun `crumple reproduce --out {out}` "
+            "with the profile it was made with, which rewrites it"
+        )
+    return meta
 
 
 def analyse(out, *, sections=None) -> Analysis:
