@@ -70,3 +70,30 @@ def test_figures_on_a_damaged_profile_is_one_line(capsys, tmp_path, content, mat
     # and reproduce into that directory says the same before it starts anything
     code, _, err = run_cli(capsys, "reproduce", "--profile", "smoke", "--quiet", "--out", tmp_path)
     _one_line_error(code, err)
+
+
+POINTS = "[[point]]\nk_s = 5e5\ninitial_noise = 0.01\n[[point]]\nk_s = 1e5\ninitial_noise = 0.7\n"
+HEAD = "[wire]\nn_segments = 10\nk_b = [2, 8]\n[ramp]\nlambdas = [1, 10]\n"
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("[sweep]\nreplicas = 2.0\n" + HEAD, "replicas must be an integer >= 1, got 2.0"),
+        (HEAD + "initial_noise = 0.7\n", r"initial noise must be in \[0, 0.5\), got 0.7"),
+        (HEAD + "initial_noise = -1\n", "initial_noise must be >= 0"),
+        # only the second point is bad: every point of the plan is checked, not the first
+        (HEAD + POINTS, r"at k_b = 2.0, k_s = 100000.0, initial_noise = 0.7: initial noise must"),
+    ],
+)
+def test_sweep_refuses_bad_parameters_before_any_run(capsys, tmp_path, text, match):
+    """Every run's Wire and Ramp are built, and checked as run_ramp checks them, up front:
+    nothing is submitted, no store is created."""
+    import re
+
+    (tmp_path / "s.toml").write_text(text)
+    out = tmp_path / "store"
+    code, _, err = run_cli(capsys, "sweep", tmp_path / "s.toml", "--out", out, "--quiet")
+    _one_line_error(code, err)
+    assert re.search(match, err), err
+    assert not out.exists()
