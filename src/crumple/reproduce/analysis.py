@@ -8,6 +8,7 @@ measures the sections in registry order, each from the series it ``READS`` and t
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -93,14 +94,22 @@ def _read_profile(out: Path) -> dict:
     return meta
 
 
-def analyse(out, *, sections=None) -> Analysis:
-    """Measure every section (default: :func:`.registry.sections`) from ``out/data``."""
+def analyse(out, *, sections=None, log: Callable[[str], None] | None = None) -> Analysis:
+    """Measure every section (default: :func:`.registry.sections`) from ``out/data``.
+    ``log(message)`` before each experiment read and each section measured."""
     out = Path(out)
     prof = _read_profile(out)["profile"]
     secs = registry.sections() if sections is None else tuple(sections)
-    series = {e.name: _series(out / "data" / e.name, e.levels) for e in registry.experiments(secs)}
+    exps = registry.experiments(secs)
+    series = {}
+    for i, e in enumerate(exps, 1):
+        if log:
+            log(f"measuring: reading the {e.name} runs ({i}/{len(exps)})")
+        series[e.name] = _series(out / "data" / e.name, e.levels)
     records: dict[str, Record] = {}
-    for s in secs:
+    for i, s in enumerate(secs, 1):
+        if log:
+            log(f"measuring: {s.NAME} ({i}/{len(secs)})")
         missing = [n for n in s.NEEDS if n not in records]
         if missing:
             raise ValueError(f"section {s.NAME!r} needs {', '.join(missing)}, measured after it")

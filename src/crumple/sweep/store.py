@@ -151,9 +151,10 @@ class Run:
         """The run's random generator: ``replica_seeds(seed, n)[replica]`` for any n > replica."""
         return np.random.default_rng(replica_seeds(self.seed, self.replica + 1)[self.replica])
 
-    def compute(self):
-        """Run the ramp (:func:`crumple.protocol.run_ramp`) and return its ``RampResult``."""
-        return run_ramp(self.wire, self.ramp, seed=self.rng())
+    def compute(self, progress=None):
+        """Run the ramp (:func:`crumple.protocol.run_ramp`) and return its ``RampResult``.
+        ``progress(i, n_stages, stage)`` after every stage, as :func:`run_ramp`'s."""
+        return run_ramp(self.wire, self.ramp, seed=self.rng(), progress=progress)
 
     def to_task(self) -> dict:
         """Plain data for a worker (no pickled objects cross the wire)."""
