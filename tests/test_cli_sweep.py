@@ -157,7 +157,7 @@ def test_job_progress_in_a_log_is_one_line_per_interval_and_phases_are_named():
     from crumple.cli.progress import JobProgress
 
     log = io.StringIO()
-    job = JobProgress(stream=log, every=3600)
+    job = JobProgress(stream=log, every=3600, grace=0)
     for i in range(50):  # many reports: in a log (not a terminal) one line, then the last
         job("elastic", _p(10, i // 10, 2, i, 60))
     job("elastic", _p(10, 10, 0, 60, 60))
@@ -167,6 +167,15 @@ def test_job_progress_in_a_log_is_one_line_per_interval_and_phases_are_named():
     assert lines[0].startswith("simulating: 0/10 ramps, 0/60 stages")
     assert lines[1].startswith("simulating: 10/10 ramps, 60/60 stages (100%)")
     assert lines[2].startswith("crumple: measuring: fig3_mass_size (1/9) (")
+    # the first line of a log waits for the other experiments' first reports
+    late = io.StringIO()
+    job = JobProgress(stream=late, every=3600, grace=3600)
+    job("plastic", _p(7, 0, 2, 0, 77))
+    job("elastic", _p(16, 0, 0, 0, 176))
+    assert late.getvalue() == ""
+    job("plastic", _p(7, 7, 0, 77, 77))
+    job("elastic", _p(16, 16, 0, 176, 176))
+    assert late.getvalue().startswith("simulating: 23/23 ramps, 253/253 stages")
     quiet = io.StringIO()
     job = JobProgress(True, stream=quiet)
     job("elastic", _p(10, 10, 0, 60, 60))

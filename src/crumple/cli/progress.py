@@ -109,8 +109,15 @@ class JobProgress:
     Thread-safe: ``reproduce`` reports from one thread per experiment.
     """
 
-    def __init__(self, quiet: bool = False, *, every: float = 30.0, stream: TextIO | None = None):
-        self.quiet, self.every = quiet, every
+    def __init__(
+        self,
+        quiet: bool = False,
+        *,
+        every: float = 30.0,
+        stream: TextIO | None = None,
+        grace: float = 10.0,
+    ):
+        self.quiet, self.every, self.grace = quiet, every, grace
         self.stream = sys.stderr if stream is None else stream
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.parts: dict[str, Any] = {}
@@ -135,6 +142,10 @@ class JobProgress:
         now = time.monotonic()
         finished = all(p.done + p.failed == p.total for p in self.parts.values())
         if not finished and now - self.last < (0.5 if self.tty else self.every):
+            return
+        # in a log, the first line waits until every experiment has reported once (each
+        # reports as soon as it has checked its store), so that its totals are the job's
+        if not finished and not self.tty and now - self.t0 < min(self.grace, self.every):
             return
         self.last = now
         line = progress_line(self.name, self.parts, elapsed=now - self.t0, bar=20 * self.tty)
