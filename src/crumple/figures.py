@@ -420,8 +420,8 @@ def plot_gamma(
         ax.set_ylabel("γ = E_s / E_b")
         ax.set_title(titles[k], fontsize=9)
         if notes[k]:
-            ax.text(0.02, 0.02, notes[k], transform=ax.transAxes, fontsize=7, va="bottom",
-                    color="tab:red")  # fmt: skip
+            ax.text(0.98, 0.02, notes[k], transform=ax.transAxes, fontsize=7, va="bottom",
+                    ha="right", color="tab:red")  # fmt: skip
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo, hi * (hi / lo) ** 0.5)  # room above the data for the legend
         ax.legend(fontsize=6, ncol=2, loc="upper left")
@@ -605,7 +605,7 @@ def plot_minimizer(
     b.set_xscale("log")
     b.set_yscale("log")
     b.set_xlabel("λ")
-    b.set_ylabel("largest node force")
+    b.set_ylabel("largest node force  [energy/length]")
     b.legend(fontsize=7)
     _panel_letter(a, 0)
     _panel_letter(b, 1)
