@@ -255,6 +255,27 @@ def ramp_animation(
 _PAPER_STYLE = {"color": "tab:red", "ls": ":", "lw": 1.2}
 
 
+def _guides(ax, curves, x_range, slopes) -> None:
+    """Straight lines of the given log-log ``slopes`` over ``x_range``, all through one anchor:
+    the geometric mean of the curves' points inside the range (where the eye compares
+    slopes). ``slopes = [(label, exponent, style dict)]``."""
+    xs, ys = [], []
+    for x, y in curves.values():
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
+        ok &= (x >= x_range[0]) & (x <= x_range[1])
+        xs.append(x[ok])
+        ys.append(y[ok])
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    if x.size == 0:
+        return
+    x0, y0 = np.exp(np.mean(np.log(x))), np.exp(np.mean(np.log(y)))
+    xg = np.geomspace(*x_range, 20)
+    for label, exponent, style in slopes:
+        if exponent is not None and np.isfinite(exponent):
+            ax.plot(xg, y0 * (xg / x0) ** exponent, label=label, **style)
+
+
 def _panel_letter(ax, k: int) -> None:
     # above the axes' top left corner: never on the data
     ax.text(0.0, 1.02, f"({'abcdefgh'[k]})", transform=ax.transAxes, va="bottom", fontsize=9)
@@ -272,13 +293,14 @@ def _loglog_curves(ax, curves, *, marker="o", errors=None):
     ax.set_yscale("log")
 
 
-def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
-    """Rows of configurations: ``{row label: [(positions (n, 2), λ), ...]}`` (Fig. 2 and its
-    alternatives, one row each).
+def plot_configuration_rows(rows, *, title: str | None = None, contact_label=None) -> Figure:
+    """Rows of configurations: ``{row label: [(positions (n, 2), λ[, contacts]), ...]}``
+    (Fig. 2 and its alternatives, one row each); ``contacts`` an (n_pairs, 2) int array of
+    segment pairs in contact, computed by the caller, drawn in orange.
 
     Axes are x and y in units of L0; the panels of a row share one scale, so the shrinking
-    with λ shows. End 0 is a blue dot, end N a hollow red square, the trap centre (the
-    origin) a grey cross (legend below the panels)."""
+    with λ shows, and carry a scale bar. End 0 is a blue dot, end N a hollow red square, the
+    trap centre (the origin) a grey cross (legend below the panels, with ``contact_label``)."""
     rows = {k: v for k, v in rows.items() if v}
     if not rows:
         raise ValueError("nothing to plot")
@@ -286,15 +308,19 @@ def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
     fig = Figure(figsize=(2.7 * ncols, 2.8 * len(rows) + 0.8), layout="constrained")
     axes = fig.subplots(len(rows), ncols, squeeze=False)
     for i, (label, panels) in enumerate(rows.items()):
-        half = 1.08 * max(float(np.max(np.abs(np.asarray(x)))) for x, _ in panels)
+        half = 1.08 * max(float(np.max(np.abs(np.asarray(x)))) for x, *_ in panels)
         for k in range(ncols):
             ax = axes[i, k]
             if k >= len(panels):
                 ax.set_visible(False)
                 continue
-            x, lam = panels[k]
+            x, lam, *rest = panels[k]
             x = np.asarray(x)
             ax.plot(x[:, 0], x[:, 1], "-", color="0.15", lw=0.9)
+            pairs = np.asarray(rest[0], int).reshape(-1, 2) if rest else np.zeros((0, 2), int)
+            for seg in np.unique(pairs.ravel()):
+                ax.plot(x[seg : seg + 2, 0], x[seg : seg + 2, 1], "-", color="tab:orange",
+                        lw=2.4, solid_capstyle="round", zorder=1.5)  # fmt: skip
             ax.plot(*x[-1], "s", ms=5, mfc="none", mec="tab:red", mew=1.2, zorder=3,
                     label="end N (last node)")  # fmt: skip
             ax.plot(*x[0], "o", ms=2.5, color="tab:blue", zorder=4, label="end 0 (first node)")
@@ -302,36 +328,46 @@ def plot_configuration_rows(rows, *, title: str | None = None) -> Figure:
             ax.set_xlim(-half, half)
             ax.set_ylim(-half, half)
             ax.set_aspect("equal", adjustable="box")
-            ax.set_title(f"λ = {lam:g}", fontsize=9)
+            extra = f", {len(pairs)} contact(s)" if rest else ""
+            ax.set_title(f"λ = {lam:g}{extra}", fontsize=9)
             ax.tick_params(labelsize=6)
             ax.set_xlabel("x / L0", fontsize=7, labelpad=1)
+            _scale_bar(ax, 2 * half)
         axes[i, 0].set_ylabel(f"{label}\ny / L0", fontsize=9)
     handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize=7, frameon=False)
+    if contact_label:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], color="tab:orange", lw=2.4))
+        labels.append(contact_label)
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize=7,
+               frameon=False)  # fmt: skip
     if title:
         fig.suptitle(title, fontsize=10)
     return fig
 
 
 def plot_mass_size(curves, dm_lambda, *, fit_range, paper_value=None) -> Figure:
-    """Fig. 3. ``curves = {label: (R/R_G, M, (prefactor, D_M))}``;
-    ``dm_lambda = {label: (λ, mean D_M, sd)}``."""
+    """Fig. 3. ``curves = {label: (R/R_G, M/M_total, (prefactor, D_M))}``;
+    ``dm_lambda = {label: (λ, mean D_M, σ)}``, drawn with a ±2σ band."""
     fig = Figure(figsize=(10, 4), layout="constrained")
     a, b = fig.subplots(1, 2)
     for label, (x, m, (pre, dm)) in curves.items():
         line = a.plot(x, m, lw=1, label=f"{label}: D_M = {dm:.2f}")[0]
         xf = np.geomspace(*fit_range, 20)
         a.plot(xf, pre * xf**dm, "--", color=line.get_color(), lw=1.5)
-    a.axvspan(*fit_range, color="0.9", zorder=0)
+    a.axvspan(*fit_range, color="0.9", zorder=0, label=f"fit window R/R_G ∈ [{fit_range[0]:g}, "
+              f"{fit_range[1]:g}]; dashed: the fits")  # fmt: skip
     a.set_xscale("log")
     a.set_yscale("log")
     a.set_xlabel("R / R_G  (R_G = r_max)")
-    a.set_ylabel("M(R)")
-    a.legend(fontsize=6, loc="lower right")
+    a.set_ylabel("mass fraction M(R) / M")
+    a.legend(fontsize=6, loc="upper left")
     _panel_letter(a, 0)
     for label, (lam, mean, sd) in dm_lambda.items():
         line = b.plot(lam, mean, "o-", ms=2.5, lw=1, label=label)[0]
-        b.fill_between(lam, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, lw=0)
+        b.fill_between(lam, mean - 2 * sd, mean + 2 * sd, color=line.get_color(), alpha=0.2,
+                       lw=0)  # fmt: skip
     if paper_value is not None:
         b.axhline(paper_value, label=f"paper: {paper_value}", **_PAPER_STYLE)
     b.set_xscale("log")
@@ -343,12 +379,27 @@ def plot_mass_size(curves, dm_lambda, *, fit_range, paper_value=None) -> Figure:
 
 
 def plot_gamma(
-    a_curves, b_curves, c_curves, d_curves, *, a_theory=None, b_theory=None, fit_range=None
+    a_curves,
+    b_curves,
+    c_curves,
+    d_curves,
+    *,
+    a_theory=None,
+    b_theory=None,
+    fit_range=None,
+    titles=("", "", "", ""),
+    slopes=None,
+    theory_label="paper's closed form",
+    notes=("", "", "", ""),
 ) -> Figure:
     """Fig. 4: γ against λ at fixed k_s (a) and fixed k_b (b), against k_b (c) and k_s (d);
-    each argument ``{label: (x, γ)}``; ``*_theory`` the closed form, dashed."""
-    fig = Figure(figsize=(10, 8), layout="constrained")
+    each argument ``{label: (x, γ)}``; ``*_theory`` the closed form, dashed. ``titles``: what
+    each panel holds fixed; ``slopes``: per panel ``(x_range, ours (exponent, σ), paper
+    exponent)`` drawn as straight lines through the data in the range; ``notes``: a line of
+    text in each panel."""
+    fig = Figure(figsize=(11, 8.5), layout="constrained")
     axes = fig.subplots(2, 2).ravel()
+    slopes = slopes or (None,) * 4
     for k, (ax, curves, theory, xl) in enumerate(
         zip(
             axes,
@@ -361,34 +412,57 @@ def plot_gamma(
         _loglog_curves(ax, curves)
         if theory:
             for i, (_, (x, y)) in enumerate(theory.items()):
-                ax.plot(
-                    x,
-                    y,
-                    "--",
-                    color=f"C{i}",
-                    lw=0.8,
-                    label="paper's closed form" if i == 0 else None,
-                )
+                ax.plot(x, y, "--", color=f"C{i}", lw=0.8,
+                        label=theory_label if i == 0 else None)  # fmt: skip
+        if slopes[k] is not None:
+            rng, (ours, sig), theirs = slopes[k]
+            _guides(ax, curves, rng, [
+                (f"ours: slope {ours:.2f} ± {sig:.2f} (pooled fit)", ours,
+                 {"color": "k", "lw": 2.0, "alpha": 0.7}),
+                (f"paper: slope {theirs:g}", theirs, _PAPER_STYLE | {"lw": 2.0}),
+            ])  # fmt: skip
         if fit_range is not None and xl == "λ":
             ax.axvspan(*fit_range, color="0.92", zorder=0)
         ax.set_xlabel(xl)
         ax.set_ylabel("γ = E_s / E_b")
-        ax.legend(fontsize=6, ncol=2)
+        ax.set_title(titles[k], fontsize=9)
+        if notes[k]:
+            ax.text(0.98, 0.02, notes[k], transform=ax.transAxes, fontsize=7, va="bottom",
+                    ha="right", color="tab:red")  # fmt: skip
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi * (hi / lo) ** 0.5)  # room above the data for the legend
+        ax.legend(fontsize=6, ncol=2, loc="upper left")
         _panel_letter(ax, k)
     return fig
 
 
 def plot_radius(
-    curves, slopes, collapsed, *, fit_range, master=None, paper_alpha=None, collapse_label=""
+    curves,
+    slopes,
+    collapsed,
+    *,
+    fit_range,
+    master=None,
+    paper_alpha=None,
+    collapse_label="",
+    alpha=None,
 ) -> Figure:
     """Fig. 5: R_g = r_max against λ (a), its local exponent d ln R_g / d ln λ (b), the
-    collapsed curves (c). ``master = (prefactor, α)`` draws the fitted power law."""
-    fig = Figure(figsize=(13, 4), layout="constrained")
+    collapsed curves (c). ``master = (prefactor, α)`` draws the fitted power law; ``alpha =
+    (α, σ)`` the pooled fit in (a), beside the paper's ``paper_alpha``."""
+    fig = Figure(figsize=(14, 4.4), layout="constrained")
     a, b, c = fig.subplots(1, 3)
     _loglog_curves(a, curves)
+    guides = []
+    if alpha is not None:
+        guides.append((f"ours: λ^{alpha[0]:.3f} ± {alpha[1]:.3f} (pooled fit)", alpha[0],
+                       {"color": "k", "lw": 2.0, "alpha": 0.7}))  # fmt: skip
+    if paper_alpha is not None:
+        guides.append((f"paper: λ^{paper_alpha:g}", paper_alpha, _PAPER_STYLE | {"lw": 2.0}))
+    _guides(a, curves, fit_range, guides)
     a.set_xlabel("λ")
-    a.set_ylabel("R_g = r_max")
-    a.legend(fontsize=6)
+    a.set_ylabel("R_g = r_max  [L0]")
+    a.legend(fontsize=6, loc="lower left")
     for label, (x, s) in slopes.items():
         b.plot(x, s, "o-", ms=2.5, lw=1, label=str(label))
     if paper_alpha is not None:
@@ -403,8 +477,8 @@ def plot_radius(
         what = master[2] if len(master) > 2 else "fit"
         c.plot(x, master[0] * x ** master[1], "k--", lw=1.5, label=f"{what}: λ^{master[1]:.3f}")
     c.set_xlabel("λ")
-    c.set_ylabel(collapse_label or "rescaled R_g")
-    c.legend(fontsize=6)
+    c.set_ylabel(collapse_label or "rescaled R_g", fontsize=8)
+    c.legend(fontsize=6, loc="lower left")
     for k, ax in enumerate((a, b, c)):
         ax.axvspan(*fit_range, color="0.92", zorder=0)
         _panel_letter(ax, k)
@@ -419,8 +493,8 @@ def plot_plasticity(curves, inset, *, fit_range, paper_inset=None) -> Figure:
     _loglog_curves(a, curves)
     a.axvspan(*fit_range, color="0.92", zorder=0)
     a.set_xlabel("λ")
-    a.set_ylabel("R_g = r_max")
-    a.legend(fontsize=6)
+    a.set_ylabel("R_g = r_max  [L0]")
+    a.legend(fontsize=6, loc="lower left")
     t, al, sg = (np.asarray(v, float) for v in inset)
     b.errorbar(t, np.abs(al), yerr=2 * sg, fmt="o-", ms=4, capsize=3, label="ours, ±2σ")
     if paper_inset is not None:
@@ -446,9 +520,10 @@ def plot_loop_shape(loops, configuration=None, neck=None, title=None) -> Figure:
         a.plot(np.degrees(theta), rho, ".", ms=3, label=label)
     a.plot(np.degrees(th), np.sqrt(np.sin(2 * th)), "k-", lw=1.5, label="r = r_max √(sin 2θ)")
     a.plot(np.degrees(th), np.cos(th - np.pi / 4), "k:", lw=1, label="circle through the neck")
-    a.set_xlabel("θ [degrees] (loop bisector at 45°)")
-    a.set_ylabel("r / r_max")
-    a.legend(fontsize=6)
+    a.set_xlabel("θ [degrees] about the neck's midpoint (loop bisector at 45°)")
+    a.set_ylabel("r / r_max  (r from the neck's midpoint)")
+    a.set_ylim(0, 1.45)
+    a.legend(fontsize=6, loc="upper center", ncols=3)  # above the data (r/r_max <= 1)
     _panel_letter(a, 0)
     if configuration is not None:
         x = np.asarray(configuration)
@@ -465,7 +540,13 @@ def plot_loop_shape(loops, configuration=None, neck=None, title=None) -> Figure:
                 label="the loop compared",
             )
             b.legend(fontsize=7)
+        if neck is not None:
+            mid = 0.5 * (x[neck[0]] + x[neck[1]])
+            b.plot(*mid, "x", color="tab:orange", ms=6, label="neck midpoint (origin of r)")
+            b.legend(fontsize=7)
         b.plot(0, 0, "+", color="tab:gray")
+        b.set_xlabel("x / L0")
+        b.set_ylabel("y / L0")
         b.set_aspect("equal", adjustable="datalim")
         if title:
             b.set_title(title, fontsize=9)
@@ -487,6 +568,9 @@ def plot_alternatives(groups) -> Figure:
         vals = np.array([np.nan if it[1] is None else it[1] for it in items], float)
         sig = np.array([0.0 if it[2] is None else it[2] for it in items], float)
         ax.errorbar(vals, y, xerr=2 * sig, fmt="o", capsize=3)
+        fin = vals[np.isfinite(vals)]
+        if fin.size and (fin > 0).all() and fin.max() / fin.min() > 30:
+            ax.set_xscale("log")  # a ratio such as γ spans decades
         pv = next((it[3] for it in items if it[3] is not None), None)
         if pv is not None:
             ax.axvline(pv, label=f"paper: {pv}", **_PAPER_STYLE)
@@ -502,26 +586,33 @@ def plot_alternatives(groups) -> Figure:
     return fig
 
 
-def plot_minimizer(lam, energy_excess, force_powell, force_newton, *, ftol=1e-6) -> Figure:
-    """Powell against Newton stage by stage: relative energy above Newton's (a), largest node
-    force of each (b)."""
+def plot_minimizer(
+    lam, energy_excess, force_powell, force_newton, *, ftol=1e-6, powell_all=None
+) -> Figure:
+    """Powell against Newton stage by stage: relative energy above Newton's (a) at the stages
+    both ran, largest node force of each (b); ``powell_all = (λ, force)`` every Powell stage,
+    also those Newton's schedule does not have."""
     fig = Figure(figsize=(10, 4), layout="constrained")
     a, b = fig.subplots(1, 2)
     lam = np.asarray(lam, float)
     ex = np.asarray(energy_excess, float)
-    a.plot(lam, np.abs(ex), "o-", ms=3, label="|E_Powell / E_Newton - 1|")
+    a.plot(lam, np.abs(ex), "o-", ms=3,
+           label="|E_Powell / E_Newton - 1| (stages both ramps ran)")  # fmt: skip
     a.set_xscale("log")
     a.set_yscale("log")
     a.set_xlabel("λ")
     a.set_ylabel("relative energy difference")
     a.legend(fontsize=7)
-    b.plot(lam, force_powell, "o-", ms=3, label="Powell")
+    if powell_all is not None:
+        b.plot(*powell_all, "o-", ms=3, label="Powell, every stage")
+    else:
+        b.plot(lam, force_powell, "o-", ms=3, label="Powell")
     b.plot(lam, force_newton, "s-", ms=3, label="Newton")
     b.axhline(ftol, color="0.5", ls="--", lw=1, label=f"equilibrium tolerance {ftol:g}")
     b.set_xscale("log")
     b.set_yscale("log")
     b.set_xlabel("λ")
-    b.set_ylabel("largest node force")
+    b.set_ylabel("largest node force  [energy/length]")
     b.legend(fontsize=7)
     _panel_letter(a, 0)
     _panel_letter(b, 1)

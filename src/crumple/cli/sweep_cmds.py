@@ -6,12 +6,12 @@ The command bodies are those of the former ``crumple/cli.py``, moved unchanged.
 from __future__ import annotations
 
 import json
-import math
 import sys
 import time
 from pathlib import Path
 
 from .inputs import CLIError
+from .progress import JobProgress
 
 __all__ = ["register"]
 
@@ -19,37 +19,6 @@ __all__ = ["register"]
 # --------------------------------------------------------------------------------------------
 # crumple sweep / status
 # --------------------------------------------------------------------------------------------
-
-
-class _SweepProgress:
-    """done / running / failed / ETA on stderr: one rewritten line on a terminal, else a line
-    every ``every`` seconds and at the end."""
-
-    def __init__(self, quiet: bool, every: float = 10.0, prefix: str = ""):
-        self.quiet, self.every, self.prefix = quiet, every, prefix
-        self.tty = sys.stderr.isatty()
-        self.last = -math.inf
-
-    def __call__(self, p) -> None:
-        if self.quiet:
-            return
-        eta = "?" if p.eta is None else f"{p.eta:.0f} s"
-        bar = ""
-        if self.tty:
-            width = 24
-            filled = int(width * (p.done + p.failed) / max(p.total, 1))
-            bar = f"[{'#' * filled}{'.' * (width - filled)}] "
-        line = (
-            f"{self.prefix}{bar}{p.done}/{p.total} done ({p.skipped} already), "
-            f"{p.running} running, {p.failed} failed, {p.elapsed:.0f} s elapsed, ETA {eta}"
-        )
-        finished = p.done + p.failed == p.total
-        if self.tty:
-            sys.stderr.write(f"\r{line}   " + ("\n" if finished else ""))
-        elif finished or time.monotonic() - self.last >= self.every:
-            self.last = time.monotonic()
-            sys.stderr.write(line + "\n")
-        sys.stderr.flush()
 
 
 def _cmd_sweep(args) -> int:
@@ -70,10 +39,14 @@ def _cmd_sweep(args) -> int:
             f"on {where}, into {args.out}",
             file=sys.stderr,
         )
-    report = run_sweep(
-        sweep, args.out, workers=args.workers, scheduler=args.scheduler,
-        progress=_SweepProgress(args.quiet),
-    )  # fmt: skip
+    display = JobProgress(args.quiet)
+    try:
+        report = run_sweep(
+            sweep, args.out, workers=args.workers, scheduler=args.scheduler,
+            progress=display.sweep,
+        )  # fmt: skip
+    finally:
+        display.close()
     print(json.dumps(report.to_dict(), indent=2))
     return 0 if report.complete else 3
 
@@ -107,15 +80,12 @@ def _cmd_status(args) -> int:
 # --------------------------------------------------------------------------------------------
 
 
-def _finish_report(out, quiet: bool, summary: dict | None = None) -> int:
+def _finish_report(out, quiet: bool, summary: dict | None = None, display=None) -> int:
     from ..reproduce import write_report
 
-    def log(msg):
-        if not quiet:
-            print(f"crumple: {msg}", file=sys.stderr)
-
+    display = JobProgress(quiet) if display is None else display
     t0 = time.perf_counter()
-    res = write_report(out, log=log)
+    res = write_report(out, log=display.phase)
     res["report_seconds"] = round(time.perf_counter() - t0, 1)
     if summary is not None:
         res["simulation"] = summary
@@ -145,14 +115,13 @@ def _cmd_reproduce(args) -> int:
         n = sum(len(s) for s in build_sweeps(profile).values())
         print(f"crumple reproduce: profile {profile}, {n} ramps, into {out} (resumable: rerun "
               "the same line to continue)", file=sys.stderr)  # fmt: skip
-    bars: dict[str, _SweepProgress] = {}
-
-    def cb(name, p):
-        bars.setdefault(name, _SweepProgress(args.quiet, prefix=f"{name:>8s}: "))(p)
-
-    summary = run(out, profile, workers=args.workers, scheduler=args.scheduler,
-                  progress=None if args.quiet else cb)  # fmt: skip
-    return _finish_report(out, args.quiet, summary)
+    display = JobProgress(args.quiet)  # one line over every experiment, then the phases
+    try:
+        summary = run(out, profile, workers=args.workers, scheduler=args.scheduler,
+                      progress=None if args.quiet else display)  # fmt: skip
+    finally:
+        display.close()
+    return _finish_report(out, args.quiet, summary, display)
 
 
 def _cmd_figures(args) -> int:

@@ -11,7 +11,7 @@ DIR`` = :func:`write_report` alone (no simulation). Layout of ``DIR``::
 
 One module per section of the report (a figure of the paper, or a study), each declaring what
 it runs, how it measures, how it draws and what it says; :mod:`.registry` lists them and
-explains the interface. The conventions of every number are in :mod:`.common`.
+explains the interface. The conventions of every number are in :mod:`.common`::
 
     experiments   what runs: the sweeps (Experiment), from crumple.paper
     series        a store -> stage-level observables (Series) and the shared measures

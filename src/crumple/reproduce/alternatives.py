@@ -24,8 +24,9 @@ READS = (ELASTIC, PER_NODE, DISORDER, POWELL)
 NEEDS = ("fig3_mass_size", "fig4_gamma", "fig5_radius")
 VALUES = ()
 FIGURES = {
-    "fig_alternatives": "The paper's open choices side by side (error bars ±2σ; a missing "
-    "point could not be measured, see the table)",
+    "fig_alternatives": "The paper's open choices side by side (error bars ±2σ, as in every "
+    "figure; a missing point could not be measured, see the table; a quantity spanning "
+    "decades, such as γ, on a log axis)",
 }
 _SPREAD = "relative replica spread of E at λ = 1000"
 
@@ -37,7 +38,10 @@ def _variant(label: str, s, p: int) -> list[dict]:
     e = e[np.isfinite(e)]
     spread = float(np.std(e) / np.mean(e)) if e.size > 1 else math.nan
     return [
-        _alt("α at (5, 5e5)", label, _alpha(s, p), s.replicas, -0.25),
+        {
+            **_alt("α at (5, 5e5)", label, _alpha(s, p), s.replicas, -0.25),
+            "fit_window": list(paper.ALPHA_RANGE),
+        },
         _alt("D_M at (5, 5e5), λ = 1000", label, _dm(s, p), s.replicas, 1.33),
         _alt("γ at (5, 5e5), λ = 1000", label, _combine(gj, np.zeros_like(gj)), s.replicas),
         _alt(_SPREAD, label, Estimate(spread, 0.0, e.size), s.replicas),

@@ -8,10 +8,12 @@ measures the sections in registry order, each from the series it ``READS`` and t
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..paper import Profile
 from . import registry
 from .common import Context, Record, _jsonable
 from .series import Series, _convergence, _series
@@ -75,17 +77,39 @@ def _read_profile(out: Path) -> dict:
             f"{out} holds no reproduction ({PROFILE_FILE} missing); run `crumple reproduce "
             f"--out {out}` first"
         )
-    return json.loads(path.read_text())
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path} is not valid JSON ({exc})") from None
+    prof = meta.get("profile") if isinstance(meta, dict) else None
+    lacks = (
+        ["profile"] if not isinstance(prof, dict)
+        else [f"profile.{k}" for k in Profile.__dataclass_fields__ if k not in prof]
+    )  # fmt: skip
+    if lacks:
+        raise ValueError(
+            f"{path} is damaged (no {', '.join(lacks)}); rerun `crumple reproduce --out {out}` "
+            "with the profile it was made with, which rewrites it"
+        )
+    return meta
 
 
-def analyse(out, *, sections=None) -> Analysis:
-    """Measure every section (default: :func:`.registry.sections`) from ``out/data``."""
+def analyse(out, *, sections=None, log: Callable[[str], None] | None = None) -> Analysis:
+    """Measure every section (default: :func:`.registry.sections`) from ``out/data``.
+    ``log(message)`` before each experiment read and each section measured."""
     out = Path(out)
     prof = _read_profile(out)["profile"]
     secs = registry.sections() if sections is None else tuple(sections)
-    series = {e.name: _series(out / "data" / e.name, e.levels) for e in registry.experiments(secs)}
+    exps = registry.experiments(secs)
+    series = {}
+    for i, e in enumerate(exps, 1):
+        if log:
+            log(f"measuring: reading the {e.name} runs ({i}/{len(exps)})")
+        series[e.name] = _series(out / "data" / e.name, e.levels)
     records: dict[str, Record] = {}
-    for s in secs:
+    for i, s in enumerate(secs, 1):
+        if log:
+            log(f"measuring: {s.NAME} ({i}/{len(secs)})")
         missing = [n for n in s.NEEDS if n not in records]
         if missing:
             raise ValueError(f"section {s.NAME!r} needs {', '.join(missing)}, measured after it")

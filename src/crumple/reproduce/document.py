@@ -20,7 +20,10 @@ _CONVENTIONS = (
     "error in quadrature (the replicas of a perfect wire at equilibrium are "
     "near copies, docs/model.md). Values pooled over (k_b, k_s) points: the "
     "mean over points, σ² = (between-point variance + mean σ²)/n. Verdict: "
-    "agrees when |ours − paper| ≤ 2σ. Confinement λ r² per unit length, Newton "
+    "agrees when |ours − paper| ≤ 2σ. Error bars and bands in every figure are ±2σ with this σ "
+    "(for a replica mean: the standard error of the mean), unless a caption says otherwise. "
+    "The λ-onset of contacts is a bracket of two successive stages, not a value with a σ. "
+    "α is fitted over λ ∈ [100, 2000] everywhere. Confinement λ r² per unit length, Newton "
     "to max force ≤ 1e-6 at every stage, unless a row says otherwise; R_G = "
     "r_max (the paper's reading, Sec. III.C); M(R) exact (fractional segments)."
 )
@@ -78,14 +81,32 @@ def _discussion(an: Analysis) -> dict[str, str]:
     return out
 
 
+def _deviation(r: dict) -> str:
+    """|ours − paper| / σ, or why there is none."""
+    if r.get("bracket"):
+        return "— (a bracket, no σ)"
+    d = r.get("deviation_sigma")
+    return "—" if d is None else f"{d:.1f}"
+
+
+def _ours(r: dict) -> str:
+    if r.get("bracket") and r["ours"] is not None:
+        return f"{r['ours']:g} (bracket {_range(r['fit_range'], True)})"
+    return _num(r["ours"], r["sigma"])
+
+
 def _table(an: Analysis) -> list[tuple]:
-    head = ["quantity", "paper", "ours", "fit range", "replicas", "verdict"]
+    head = ["quantity", "paper", "ours ± σ", "|ours − paper|/σ", "fit range", "replicas",
+            "verdict"]  # fmt: skip
     body = [
         [
             r["quantity"],
             f"{r['paper']:g}",
-            _num(r["ours"], r["sigma"]),
-            _range(r["fit_range"], r.get("bracket", False)),
+            _ours(r),
+            _deviation(r),
+            # a row fitted over a window of λ prints the window (the same for every α row);
+            # the stages inside it are in results.json's fit_range
+            _range(r.get("fit_window") or r["fit_range"], r.get("bracket", False)),
             r["replicas"],
             r["verdict"],
         ]
@@ -121,7 +142,7 @@ def _claims_and_alternatives(an: Analysis) -> list[tuple]:
             a["quantity"],
             a["variant"],
             _num(a["value"], a["sigma"]),
-            _range(a["fit_range"]),
+            _range(a.get("fit_window") or a["fit_range"]),
             str(a["replicas"]),
             "—" if a["paper"] is None else f"{a['paper']:g}",
         ]

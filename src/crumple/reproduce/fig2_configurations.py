@@ -23,7 +23,13 @@ NAME = "fig2_configurations"
 READS = (ELASTIC, PER_NODE, POWELL)
 NEEDS: tuple[str, ...] = ()
 VALUES = (paper.PAPER_VALUES["lambda_contact"],)
-FIGURES = {"fig2_configurations": "Fig. 2: configurations at λ = 70, 200, 300, 1000"}
+FIGURES = {
+    "fig2_configurations": "Fig. 2: configurations at λ = 70, 200, 300, 1000 (replica 0; x "
+    "and y in units of L0; the panels of a row share one scale, with a scale bar; blue circle "
+    "and red square: the wire's first and last node; grey cross: the trap centre; orange: "
+    f"segments in contact, closer than {CONTACT_FACTOR:g} hard-core widths, as counted in "
+    "the table's contact row)"
+}
 
 
 def _count_inflections(x, rel: float = 0.02) -> int:
@@ -145,13 +151,25 @@ def _stretching_claim(el: Series, fig2: int) -> dict:
 
 
 def _configurations(wires: dict[str, tuple[Series, int]]) -> dict:
-    """Replica 0 at the paper's λ values, per wire (the panels of Fig. 2)."""
+    """Replica 0 at the paper's λ values, per wire (the panels of Fig. 2), with the segment
+    pairs in contact."""
     rows = {}
     for label, (s, p) in wires.items():
-        rows[label] = [
-            (s.positions[p, 0, s.j(lm)], lm)
+        shown = [
+            s.positions[p, 0, s.j(lm)]
             for lm in paper.PAPER_LAMBDAS
             if s.valid(p, 0, s.j(lm)) and np.isclose(s.lam[s.j(lm)], lm)
+        ]
+        lams = [
+            lm
+            for lm in paper.PAPER_LAMBDAS
+            if s.valid(p, 0, s.j(lm)) and np.isclose(s.lam[s.j(lm)], lm)
+        ]
+        # the contacts the table's row counts, highlighted (computed here: a figure computes
+        # no physics)
+        rows[label] = [
+            (x, lm, close_segment_pairs(x, CONTACT_FACTOR * s.hard_core)[0])
+            for x, lm in zip(shown, lams, strict=True)
         ]
     return rows
 
@@ -198,7 +216,9 @@ def draw(rec: Record) -> dict:
     from ..figures import plot_configuration_rows
 
     fig = plot_configuration_rows(
-        rec.detail["configurations"], title="(k_b, k_s) = (5, 5e5), replica 0 (paper's Fig. 2)"
+        rec.detail["configurations"],
+        title="(k_b, k_s) = (5, 5e5), replica 0 (paper's Fig. 2)",
+        contact_label=f"in contact (closer than {CONTACT_FACTOR:g} hard-core widths)",
     )
     return {"fig2_configurations": fig}
 

@@ -23,9 +23,13 @@ READS = (ELASTIC,)
 NEEDS: tuple[str, ...] = ()
 VALUES = tuple(paper.PAPER_VALUES[k] for k in ("D_M", "D_M_slope"))
 FIGURES = {
-    "fig3_mass_size": "Fig. 3: M(R) at λ = 1000 (replica 0; dashed: the fits on "
-    "R/R_G in [0.5, 1], which overshoot M = 1 where M(R) is not a power law) and D_M "
-    "against λ (replica mean ± sd)",
+    "fig3_mass_size": "Fig. 3: (a) the mass fraction M(R)/M within R of the centre of mass "
+    "at λ = 1000 (replica 0; grey: the fit window R/R_G ∈ [0.5, 1]; dashed: the fitted power "
+    "laws, which overshoot M = 1 where M(R) is not a power law); (b) D_M against λ (replica "
+    "mean, band ±2σ of the mean). Gaps in (b): stages where D_M cannot be fitted for some "
+    "replica, because M(R) = 0 at R = R_G/2 (no wire within half the radius of the centre "
+    "of mass: a hollow loop, typical of the first loops). D_M = 1 at the first stages: the "
+    "wire is still straight",
 }
 _QUANTITY = "D_M at λ = 1000, six points"
 
@@ -35,9 +39,10 @@ def _label(key) -> str:
 
 
 def _dm_against_lambda(el: Series, fig3: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Replica mean and sd of D_M at every stage of each Fig. 3 point: (point, lam)."""
+    """Replica mean, sd and count of D_M at every stage of each Fig. 3 point: (point, lam)."""
     dm_lam = np.full((len(fig3), el.lam.size), np.nan)
     dm_lam_sd = np.full_like(dm_lam, np.nan)
+    dm_lam_n = np.zeros(dm_lam.shape, int)
     for a, p in enumerate(fig3):
         for j in range(el.lam.size):
             vals = [
@@ -46,7 +51,8 @@ def _dm_against_lambda(el: Series, fig3: list[int]) -> tuple[np.ndarray, np.ndar
             if vals:
                 dm_lam[a, j] = np.mean(vals)
                 dm_lam_sd[a, j] = np.std(vals)
-    return dm_lam, dm_lam_sd
+                dm_lam_n[a, j] = len(vals)
+    return dm_lam, dm_lam_sd, dm_lam_n
 
 
 def _mass_curves(el: Series) -> dict:
@@ -88,7 +94,7 @@ def measure(ctx: Context) -> Record:
         for r in range(el.replicas)
         if el.valid(p, r, j3)
     ]
-    dm_lam, dm_lam_sd = _dm_against_lambda(el, fig3)
+    dm_lam, dm_lam_sd, dm_lam_n = _dm_against_lambda(el, fig3)
     extra = {
         "D_M_points": {f"{k[0]:g}, {k[1]:g}": v for k, v in dm_points.items()},
         "M_at_half_RG": [min(m_half), max(m_half)] if m_half else None,
@@ -98,6 +104,7 @@ def measure(ctx: Context) -> Record:
             "lam": el.lam,
             "mean": dm_lam,
             "sd": dm_lam_sd,
+            "n": dm_lam_n,
         },
     }
     lo, hi = paper.DM_SATURATION_RANGE
@@ -125,7 +132,9 @@ def draw(rec: Record) -> dict:
     from ..figures import plot_mass_size
 
     d = rec.extra["D_M_lambda"]
-    dml = {_label(k): (d["lam"], d["mean"][i], d["sd"][i]) for i, k in enumerate(d["points"])}
+    # σ of a replica mean: sd / sqrt(n) (the band is ±2σ, as everywhere in the report)
+    sem = np.asarray(d["sd"], float) / np.sqrt(np.maximum(np.asarray(d["n"], float), 1.0))
+    dml = {_label(k): (d["lam"], d["mean"][i], sem[i]) for i, k in enumerate(d["points"])}
     fig = plot_mass_size(rec.detail["curves"], dml, fit_range=paper.DM_RANGE, paper_value=1.33)
     return {"fig3_mass_size": fig}
 

@@ -20,9 +20,15 @@ NAME = "fig5_radius"
 READS = (ELASTIC,)
 NEEDS: tuple[str, ...] = ()
 VALUES = tuple(paper.PAPER_VALUES[k] for k in ("collapse", "alpha"))
+_KB, _KS = paper.FIG5_REFERENCE
 FIGURES = {
-    "fig5_radius": "Fig. 5: R_g = r_max against λ, its local exponent, and the curves "
-    "rescaled with the fitted collapse exponent (grey: the α fit range)",
+    "fig5_radius": "Fig. 5: (a) R_g = r_max against λ (replica means) with our pooled α fit "
+    "(black) and the paper's λ^-1/4 (red dotted), both drawn through the data in the fit "
+    f"window; (b) its local exponent d ln R_g / d ln λ between successive stages; (c) the "
+    f"curves rescaled by (g_ref / k_b k_s)^c with g_ref = k_b k_s of the paper's reference "
+    f"point ({_KB:g}, {_KS:g}) and c the fitted collapse exponent; dashed black: a power law "
+    "fitted to that reference curve, onto which the others are rescaled. Grey: the α fit "
+    f"window λ ∈ [{paper.ALPHA_RANGE[0]:g}, {paper.ALPHA_RANGE[1]:g}]",
 }
 
 
@@ -93,10 +99,11 @@ def measure(ctx: Context) -> Record:
             "with one another (claims table: 'α is independent of k_b and k_s')",
         )
     ]
+    rows[0]["fit_window"] = list(paper.ALPHA_RANGE)  # printed for every α row alike
     rms = _pool([_alpha(el, p, "rms") for p in fig3], paper.ALPHA_RANGE)
     alts = [
-        _alt("α, six points", "default: R_g = r_max", alpha, nrep, -0.25),
-        _alt("α, six points", "R_g = RMS radius", rms, nrep, -0.25),
+        {**_alt("α, six points", variant, est, nrep, -0.25), "fit_window": list(paper.ALPHA_RANGE)}
+        for variant, est in (("default: R_g = r_max", alpha), ("R_g = RMS radius", rms))
     ]
     curves = {}
     for p in fig3:
@@ -112,6 +119,7 @@ def measure(ctx: Context) -> Record:
             f"scatter of ln R_g {cf.scatter:.3f} collapsed vs {cf.scatter_uncollapsed:.3f} raw",
         )
     )
+    rows[-1]["fit_window"] = list(paper.ALPHA_RANGE)
     extra = {
         "local_slopes_in_range": [min(in_range), max(in_range)] if in_range else None,
         "alpha_points": {f"{k[0]:g}, {k[1]:g}": v for k, v in alpha_points.items()},
@@ -138,14 +146,17 @@ def draw(rec: Record) -> dict:
 
     d = rec.detail
     c = rec.extra["collapse"]["exponent"]
+    alpha = next(r for r in rec.rows if r["key"] == "alpha")
+    kb, ks = paper.FIG5_REFERENCE
     fig = plot_radius(
         d["radius"],
         d["slopes"],
         d["collapsed"],
         fit_range=paper.ALPHA_RANGE,
-        master=(*d["master"], "power-law fit to the reference curve"),
+        master=(*d["master"], f"reference ({kb:g}, {ks:g}) fitted"),
         paper_alpha=-0.25,
-        collapse_label=f"R_g (g_ref / k_b k_s)^c, fitted c = {c:.3f}",
+        alpha=(alpha["ours"], alpha["sigma"]),
+        collapse_label=f"R_g (g_ref / k_b k_s)^c, g_ref = {kb:g} × {ks:g}; fitted c = {c:.3f}",
     )
     return {"fig5_radius": fig}
 

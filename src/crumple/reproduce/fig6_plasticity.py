@@ -24,7 +24,13 @@ NEEDS = ("fig5_radius",)
 VALUES = tuple(
     paper.PAPER_VALUES[k] for k in ("alpha_s0.05", "alpha_s0.2", "alpha_s0.4", "alpha_saturation")
 )
-FIGURES = {"fig6_plasticity": "Fig. 6: R_g against λ with plasticity, α against θ_p"}
+FIGURES = {
+    "fig6_plasticity": f"Fig. 6: (a) R_g = r_max against λ at (k_b, k_s) = ({paper.FIG2[0]:g}, "
+    f"{paper.FIG2[1]:g}) with plasticity s at θ_p = {paper.PLASTIC_THETA_P:g} rad (ours: the "
+    "paper does not give θ_p), and without (elastic); legend: α per s, ±σ, fitted over λ ∈ "
+    f"[{paper.ALPHA_RANGE[0]:g}, {paper.ALPHA_RANGE[1]:g}] (grey); (b) |α| against θ_p at "
+    "s = 0.4, bars ±2σ"
+}
 _ROWS = ("alpha_s0.05", "alpha_s0.2", "alpha_s0.4", "alpha_saturation")
 
 
@@ -99,6 +105,8 @@ def measure(ctx: Context) -> Record:
     reach = _reach(pl)
     inset = sorted((k[1], e) for k, e in plastic_alpha.items() if k[0] == 0.4)
     sat = inset[-1][1]
+    for r in rows:
+        r["fit_window"] = list(paper.ALPHA_RANGE)  # printed for every α row alike
     rows.append(
         _row(
             "alpha_saturation",
@@ -107,6 +115,7 @@ def measure(ctx: Context) -> Record:
             f"|α| at θ_p = {inset[-1][0]:g} rad, s = 0.4",
         )
     )
+    rows[-1]["fit_window"] = list(paper.ALPHA_RANGE)
     main = sorted((k[0], e) for k, e in plastic_alpha.items() if k[1] == paper.PLASTIC_THETA_P)
     extra = {
         "plastic_fraction_beyond_theta_p": {
@@ -129,7 +138,11 @@ def measure(ctx: Context) -> Record:
         rows=tuple(rows),
         claims=(_s_claim(main, fig5.detail["alpha_points"][paper.FIG2]), _theta_claim(inset)),
         extra=extra,
-        detail={"curves": curves, "inset": inset_fig},
+        detail={
+            "curves": curves,
+            "inset": inset_fig,
+            "elastic_alpha": fig5.detail["alpha_points"][paper.FIG2],
+        },
     )
 
 
@@ -138,9 +151,17 @@ def draw(rec: Record) -> dict:
     from ..figures import plot_plasticity
 
     inset = tuple(zip(*rec.detail["inset"], strict=True))
-    fig = plot_plasticity(
-        rec.detail["curves"], inset, fit_range=paper.ALPHA_RANGE, paper_inset=0.26
-    )
+    pa = rec.extra["plastic_alpha"]
+    el = rec.detail["elastic_alpha"]
+    curves = {}
+    for label, xy in rec.detail["curves"].items():
+        a = pa.get(f"{label}, theta_p={paper.PLASTIC_THETA_P:g}")
+        if a is not None:
+            label = f"{label}: α = {a.value:.3f} ± {a.sigma:.3f}"
+        elif label == "elastic":
+            label = f"elastic: α = {el.value:.3f} ± {el.sigma:.3f}"
+        curves[label] = xy
+    fig = plot_plasticity(curves, inset, fit_range=paper.ALPHA_RANGE, paper_inset=0.26)
     return {"fig6_plasticity": fig}
 
 

@@ -20,7 +20,15 @@ NAME = "loop_shape"
 READS = (ELASTIC,)
 NEEDS: tuple[str, ...] = ()
 VALUES = ()
-FIGURES = {"fig_loop_shape": "Sec. III.A: the early-stage loop against r² = ℓ² sin 2θ"}
+FIGURES = {
+    "fig_loop_shape": "Sec. III.A: the early-stage loop against r² = ℓ² sin 2θ. (a) r and θ "
+    "are polar coordinates about the midpoint of the loop's neck (its two closest nodes at "
+    "least N/4 apart along the wire), θ measured so that the loop's farthest node lies on the "
+    "lobe's bisector θ = 45°, r rescaled by that node's distance r_max; solid: the lemniscate "
+    "lobe, dotted: a circle through the neck; (b) the wire (x, y in units of L0) of the first "
+    "loop shown in (a), the loop compared in orange, the neck's midpoint (the origin of r) "
+    "marked ×, the trap centre +"
+}
 #: Largest rms deviation of r/r_max from the lemniscate lobe still called a match.
 LOOP_RMS = 0.05
 

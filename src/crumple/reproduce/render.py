@@ -30,7 +30,8 @@ def to_markdown(blocks) -> str:
             out.append("\n".join(f"- {x}" for x in blk[1]))
         elif kind == "table":
             head, body = blk[1], blk[2]
-            rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+            rows = ["| " + " | ".join(h.replace("|", "\\|") for h in head) + " |",
+                    "|" + "---|" * len(head)]  # fmt: skip
             rows += ["| " + " | ".join(str(c).replace("|", "\\|") for c in r) + " |" for r in body]
             out.append("\n".join(rows))
         elif kind == "fig":

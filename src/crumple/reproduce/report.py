@@ -18,10 +18,13 @@ from .render import to_html, to_markdown
 __all__ = ["check_report", "make_figures", "write_report"]
 
 
-def make_figures(an: Analysis) -> dict:
-    """Every section's figures (stem -> matplotlib Figure), each drawn from its record."""
+def make_figures(an: Analysis, log: Callable[[str], None] | None = None) -> dict:
+    """Every section's figures (stem -> matplotlib Figure), each drawn from its record.
+    ``log(message)`` before each section."""
     out = {}
-    for s in an.sections:
+    for i, s in enumerate(an.sections, 1):
+        if log:
+            log(f"drawing figures: {', '.join(s.FIGURES) or s.NAME} ({i}/{len(an.sections)})")
         figs = s.draw(an.records[s.NAME])
         if set(figs) != set(s.FIGURES):
             raise ValueError(
@@ -31,9 +34,11 @@ def make_figures(an: Analysis) -> dict:
     return out
 
 
-def _save(figs: dict, figdir: Path) -> None:
+def _save(figs: dict, figdir: Path, log: Callable[[str], None] | None = None) -> None:
     figdir.mkdir(parents=True, exist_ok=True)
-    for stem, fig in figs.items():
+    for i, (stem, fig) in enumerate(figs.items(), 1):
+        if log:
+            log(f"drawing figures: saving {stem}.png and .svg ({i}/{len(figs)})")
         for ext in ("png", "svg"):
             tmp = figdir / f".{stem}.tmp.{ext}"
             fig.savefig(tmp, dpi=110)
@@ -47,12 +52,14 @@ def write_report(out, *, log: Callable[[str], None] | None = None, sections=None
     out = Path(out)
     meta = _read_profile(out)
     t0 = time.perf_counter()
-    an = analyse(out, sections=sections)
+    an = analyse(out, sections=sections, log=log)
     if log:
-        log(f"analysed in {time.perf_counter() - t0:.1f} s; drawing figures")
+        log(f"measured in {time.perf_counter() - t0:.1f} s")
     figdir = out / "figures"
-    figs = make_figures(an)
-    _save(figs, figdir)
+    figs = make_figures(an, log)
+    _save(figs, figdir, log)
+    if log:
+        log("writing report: results.json, report.md, report.html")
     doc = blocks(an, meta)
     results = _jsonable({**an.to_json(), "versions": meta.get("versions", {})})
     atomic_write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False) + "\n")

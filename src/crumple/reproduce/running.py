@@ -12,7 +12,7 @@ from typing import Any
 from .. import paper
 from ..storage import atomic_write_text, versions
 from . import registry
-from .analysis import PROFILE_FILE
+from .analysis import PROFILE_FILE, _read_profile
 
 __all__ = ["run"]
 
@@ -22,7 +22,7 @@ def _check_profile(out: Path, profile: str) -> paper.Profile:
         raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(paper.PROFILES)}")
     stored = out / PROFILE_FILE
     if stored.exists():
-        old = json.loads(stored.read_text())["profile"]["name"]
+        old = _read_profile(out)["profile"]["name"]
         if old != profile:
             raise ValueError(
                 f"{out} holds the {old!r} profile; use another --out for the {profile!r} profile"

@@ -67,21 +67,43 @@ def _undo_dask_malloc_trim() -> bool:
         return False
 
 
-def execute_run(task: Mapping, out: str) -> dict:
+def _stage_reporter(topic: str | None, rid: str) -> Callable[[int], None] | None:
+    """``report(stages_done)``: a Dask event on ``topic`` from the worker running ``rid`` (the
+    client's :func:`_execute` counts the stages of the runs in flight). None outside a worker."""
+    if topic is None:
+        return None
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):  # not in a Dask worker
+        return None
+
+    def report(stages: int) -> None:
+        worker.log_event(topic, {"id": rid, "stages": stages})  # batched, non-blocking
+
+    return report
+
+
+def execute_run(task: Mapping, out: str, topic: str | None = None) -> dict:
     """Compute one run on a worker and write ``OUT/runs/<id>.h5`` (or ``<id>.failed.json``).
 
     Never raises for an error of the run itself: the error is recorded and ``{"status":
-    "failed"}`` returned, so that the sweep goes on. Returns a small summary dict.
+    "failed"}`` returned, so that the sweep goes on. Returns a small summary dict. With
+    ``topic``: a Dask event ``{"id", "stages"}`` when the run starts and after every stage.
     """
     _undo_dask_malloc_trim()
     out_path = Path(out)
     rid = task["id"]
     t0 = time.perf_counter()
+    report = _stage_reporter(topic, rid)
     try:
         run = Run.from_task(task)
         if run.id != rid:
             raise RuntimeError(f"run id mismatch: task {rid}, parameters hash to {run.id}")
-        result = run.compute()
+        if report is not None:
+            report(0)
+        result = run.compute(None if report is None else lambda i, n, stage: report(i + 1))
         save_ramps(
             _h5(out_path, rid),
             [result],
@@ -130,8 +152,13 @@ class Progress:
     """State of a running sweep, for a progress display.
 
     ``done`` counts every finished run of the sweep (``skipped`` of them were already in the
-    store); ``running`` the runs in flight (at most one per worker thread); ``eta`` seconds
-    (None until a run has finished).
+    store); ``running`` the runs in flight (runs that a worker has started and not finished:
+    at most one per worker thread); ``eta`` seconds (None until some work is done).
+
+    ``stages``, ``stages_total``: λ stages done and planned, over every run of the sweep; a
+    finished run counts all its planned stages (also one that stopped early on ``stop_tol``),
+    a run in flight the stages its worker has reported. ``stages_skipped``: those of the runs
+    already in the store (done before ``elapsed`` started, so not part of the rate).
     """
 
     total: int
@@ -141,6 +168,9 @@ class Progress:
     skipped: int
     elapsed: float
     eta: float | None
+    stages: int = 0
+    stages_total: int = 0
+    stages_skipped: int = 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -306,9 +336,12 @@ def run_sweep(
         if todo:
             with _connect(client, scheduler, workers, len(todo), quiet_logs) as c:
                 n_workers = len(c.scheduler_info().get("workers", {}))
-                computed, failed = _execute(c, todo, out, total, skipped, progress, refresh, t0)
+                n = sum(len(r.ramp.lambdas) for r in sweep.runs())
+                computed, failed = _execute(c, todo, out, total, skipped, progress, refresh, t0, n)
         elif progress is not None:
-            progress(Progress(total, total, 0, 0, skipped, time.perf_counter() - t0, 0.0))
+            n = sum(len(r.ramp.lambdas) for r in sweep.runs())
+            progress(Progress(total, total, 0, 0, skipped, time.perf_counter() - t0, 0.0,
+                              stages=n, stages_total=n, stages_skipped=n))  # fmt: skip
     return SweepReport(
         path=out,
         total=total,
@@ -332,22 +365,35 @@ def _todo(sweep: Sweep, out: Path) -> list[Run]:
     return todo
 
 
-def _execute(client, todo, out, total, skipped, progress, refresh, t0):
+def _execute(client, todo, out, total, skipped, progress, refresh, t0, stages_total):
     from distributed import as_completed
 
     token = os.urandom(4).hex()
+    topic = f"crumple-stages-{token}"  # one topic per sweep: sweeps may share a client
+    n_stages = {run.id: len(run.ramp.lambdas) for run in todo}
+    in_flight: dict[str, int] = {}  # run id -> stages reported by its worker
+
+    def on_event(event) -> None:  # on the client's event loop: a dict update, nothing more
+        msg = event[1] if isinstance(event, tuple) else event
+        if isinstance(msg, dict) and msg.get("id") in n_stages:
+            in_flight[msg["id"]] = max(in_flight.get(msg["id"], 0), int(msg["stages"]))
+
+    client.subscribe_topic(topic, on_event)
     tasks = {}
     for run in todo:
         task = run.to_task()
         fut = client.submit(
-            execute_run, task, str(out), key=f"crumple-run-{run.id}-{token}", pure=False
+            execute_run, task, str(out), topic, key=f"crumple-run-{run.id}-{token}", pure=False
         )
         tasks[fut.key] = (fut, task)
     pending = as_completed([f for f, _ in tasks.values()])
     computed: list[str] = []
     failed: dict[str, str] = {}
+    finished_ids: set[str] = set()
     last = -math.inf
     threads = sum(client.nthreads().values()) or 1
+    planned = sum(n_stages.values())
+    skipped_stages = stages_total - planned
     try:
         while not pending.is_empty():
             batch = pending.next_batch(block=False)
@@ -365,25 +411,30 @@ def _execute(client, todo, out, total, skipped, progress, refresh, t0):
                     computed.append(summary["id"])
                 else:
                     failed[summary["id"]] = summary["message"]
+                finished_ids.add(task["id"])
                 fut.release()
             now = time.perf_counter()
             if progress is not None and (batch or now - last >= refresh or pending.is_empty()):
                 if now - last >= 5 * refresh:
                     threads = sum(client.nthreads().values()) or threads
                 last = now
-                finished = len(computed) + len(failed)
-                remaining = len(todo) - finished
+                remaining = len(todo) - len(finished_ids)
+                started = {k: v for k, v in list(in_flight.items()) if k not in finished_ids}
+                work = sum(n_stages[k] for k in finished_ids) + sum(started.values())
                 elapsed = now - t0
-                eta = elapsed / finished * remaining if finished else None
+                eta = _eta(elapsed, work, planned)
                 progress(
                     Progress(
                         total=total,
                         done=skipped + len(computed),
                         failed=len(failed),
-                        running=min(threads, remaining),
+                        running=min(threads, remaining, len(started)),
                         skipped=skipped,
                         elapsed=elapsed,
                         eta=eta,
+                        stages=skipped_stages + work,
+                        stages_total=stages_total,
+                        stages_skipped=skipped_stages,
                     )
                 )
             if not batch:
@@ -391,4 +442,17 @@ def _execute(client, todo, out, total, skipped, progress, refresh, t0):
     except BaseException:
         client.cancel([f for f, _ in tasks.values()])
         raise
+    finally:
+        client.unsubscribe_topic(topic)
     return computed, failed
+
+
+def _eta(elapsed: float, work: float, planned: float) -> float | None:
+    """Seconds left if the remaining ``planned - work`` stages go at the rate so far.
+
+    >>> _eta(100.0, 25, 100), _eta(5.0, 0, 10)
+    (300.0, None)
+    """
+    if work <= 0:
+        return None
+    return max(0.0, elapsed / work * (planned - work))

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..model import Plasticity, Wire
-from ..protocol import Ramp, default_schedule
+from ..protocol import Ramp, default_schedule, initial_state
 from .store import Run, _canonical, canonical_json
 
 _FACTORY_KEYS = ("young", "radius", "bending", "stretching")
@@ -484,6 +484,10 @@ def _build(spec: dict, where: str) -> tuple[Wire, Ramp]:
         if "lambdas" not in r:
             r["lambdas"] = default_schedule(**r.pop("schedule", {}))
         ramp = Ramp.from_dict(_canonical(Ramp(**r).to_dict()))
+        # what run_ramp checks only when it starts, on the worker (initial_noise < 0.5 keeps
+        # the first configuration free of crossings): checked here by the model's own code,
+        # so that a bad value stops the sweep before anything is submitted
+        initial_state(wire, ramp.initial_noise, seed=0)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"[ramp]{at}: {exc}") from None
     return wire, ramp

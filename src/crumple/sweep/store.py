@@ -151,9 +151,10 @@ class Run:
         """The run's random generator: ``replica_seeds(seed, n)[replica]`` for any n > replica."""
         return np.random.default_rng(replica_seeds(self.seed, self.replica + 1)[self.replica])
 
-    def compute(self):
-        """Run the ramp (:func:`crumple.protocol.run_ramp`) and return its ``RampResult``."""
-        return run_ramp(self.wire, self.ramp, seed=self.rng())
+    def compute(self, progress=None):
+        """Run the ramp (:func:`crumple.protocol.run_ramp`) and return its ``RampResult``.
+        ``progress(i, n_stages, stage)`` after every stage, as :func:`run_ramp`'s."""
+        return run_ramp(self.wire, self.ramp, seed=self.rng(), progress=progress)
 
     def to_task(self) -> dict:
         """Plain data for a worker (no pickled objects cross the wire)."""
@@ -224,11 +225,29 @@ def _read_manifest(out: Path) -> dict:
         m = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path} is not valid JSON ({exc})") from None
-    if m.get("format") != MANIFEST_FORMAT:
+    if not isinstance(m, dict) or m.get("format") != MANIFEST_FORMAT:
         raise ValueError(f"{path} is not a crumple sweep manifest")
-    if m.get("format_version", 0) > MANIFEST_VERSION:
-        raise ValueError(f"{path} has format version {m['format_version']}; upgrade crumple")
+    version = m.get("format_version", 0)
+    if not isinstance(version, int) or version > MANIFEST_VERSION:
+        raise ValueError(f"{path} has format version {version!r}; upgrade crumple")
+    _check_manifest(path, m)
     return m
+
+
+def _check_manifest(path: Path, m: dict) -> None:
+    """The keys that status and load read, with their types: a hand-edited or truncated
+    manifest is a one-line ValueError here, never a KeyError or AttributeError later."""
+    runs = m.get("runs")
+    if not isinstance(runs, list):
+        raise ValueError(f"{path} is damaged: 'runs' is missing or not a list")
+    for i, r in enumerate(runs):
+        if not isinstance(r, dict) or not isinstance(r.get("id"), str):
+            raise ValueError(f"{path} is damaged: runs[{i}] has no 'id'")
+        if not isinstance(r.get("replica", 0), int):
+            raise ValueError(f"{path} is damaged: runs[{i}] has a non-integer 'replica'")
+    for key, kind in (("dims", list), ("lambdas", list), ("replicas", int)):
+        if key in m and not isinstance(m[key], kind):
+            raise ValueError(f"{path} is damaged: {key!r} is not a {kind.__name__}")
 
 
 def _failure(path: Path) -> dict:
