@@ -331,6 +331,7 @@ def minimize_wire(
             feasible=feasible,
             curvature_tol=STABILITY_TOL,
             metric=node_lengths(wire),
+            zero_modes=lambda x: _symmetry_modes(x, wire.trap_center, lam),
         )
     if method == "powell":
         if rng is None:
@@ -352,6 +353,16 @@ def node_lengths(wire: Wire) -> np.ndarray:
     L0/(2N) at the two ends. The metric of the stability test: with it the eigenvalues of the
     Hessian are those of the continuum wire, independent of N."""
     return confinement_weights(wire.n_nodes, "per-length", wire.length)
+
+
+def _symmetry_modes(x, center, lam):
+    """Rigid motions that leave the energy unchanged: the rotation about the trap's centre
+    (the trap is isotropic), and the two translations when there is no trap."""
+    r = x - np.asarray(center)
+    modes = [np.column_stack([-r[:, 1], r[:, 0]]).ravel()]
+    if lam == 0:
+        modes += [np.tile([1.0, 0.0], len(x)), np.tile([0.0, 1.0], len(x))]
+    return np.array(modes)
 
 
 ProgressCallback = Callable[[int, int, Stage], None]
