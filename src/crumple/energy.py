@@ -653,9 +653,12 @@ class WireEnergy:
         if dense:
             h = np.bincount(rows * ndof + cols, weights=vals, minlength=ndof * ndof)
             return h.reshape(ndof, ndof)
-        if self._pattern is None or self._pattern[0] is not ks:
-            self._pattern = (ks, *_csc_pattern(rows, cols, ndof))
-        _, indptr, indices, where = self._pattern
+        if self._pattern is None or not (
+            self._pattern[0] is ks
+            or (np.array_equal(self._pattern[0], ks) and np.array_equal(self._pattern[1], js))
+        ):  # a rebuilt neighbour list often holds the same pairs: keep the pattern then
+            self._pattern = (ks, js, *_csc_pattern(rows, cols, ndof))
+        _, _, indptr, indices, where = self._pattern
         data = np.bincount(where, weights=vals, minlength=indices.shape[0])
         return sp.csc_matrix((data, indices, indptr), shape=(ndof, ndof), copy=False)
 

@@ -147,6 +147,22 @@ def _solve(n, lp, li, lx, d, perm, b):
 
 
 @njit(cache=True)
+def _unit_back_solve(n, lp, li, lx, perm, k):
+    """Pᵀ L⁻ᵀ e_k (back substitution from row k down)."""
+    x = np.zeros(n)
+    x[k] = 1.0
+    for i in range(k - 1, -1, -1):
+        s = x[i]
+        for p in range(lp[i], lp[i + 1]):
+            s -= lx[p] * x[li[p]]
+        x[i] = s
+    out = np.empty(n)
+    for i in range(n):
+        out[perm[i]] = x[i]
+    return out
+
+
+@njit(cache=True)
 def _gather(src, data, out):
     for i in range(src.shape[0]):
         out[i] = data[src[i]]
@@ -245,17 +261,7 @@ class Factorization:
             if not self._d[k] < 0:
                 return None
         s = self._sym
-        e = np.zeros(s.n)
-        e[k] = 1.0
-        # L⁻ᵀ e_k: back substitution only
-        x = e
-        for i in range(s.n - 1, -1, -1):
-            lo, hi = s.lp[i], s.lp[i + 1]
-            if hi > lo:
-                x[i] -= float(self._lx[lo:hi] @ x[s.ai_l[lo:hi]])
-        out = np.empty(s.n)
-        out[s.perm] = x
-        return out
+        return _unit_back_solve(s.n, s.lp, s.ai_l, self._lx, s.perm, k)
 
 
 class LDLT:

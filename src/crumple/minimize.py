@@ -359,8 +359,14 @@ def _force_resolution(h, x) -> float:
     when the coordinates move by one unit in the last place. Below it the force is noise: a
     stiff wire of 10⁴ nodes at |x| ~ 0.5 cannot be brought below ~2e-5 (measured, B = 0.05)."""
     u = np.spacing(np.abs(x)).ravel()
-    a = abs(h) if sp.issparse(h) else np.abs(np.asarray(h))
-    r = a @ u
+    if sp.issparse(h) and h.format == "csc" and h.shape[0] == h.shape[1] and h.nnz:
+        # column sums of |H| u[row], = row sums by symmetry: no new sparse matrix
+        r = np.bincount(
+            np.repeat(np.arange(h.shape[1]), np.diff(h.indptr)),
+            weights=np.abs(h.data) * u[h.indices], minlength=h.shape[1],
+        )  # fmt: skip
+    else:
+        r = (abs(h) if sp.issparse(h) else np.abs(np.asarray(h))) @ u
     return RESOLUTION_FACTOR * float(np.max(r)) if r.size else 0.0
 
 
