@@ -1,8 +1,8 @@
 """The engine at scale (issue 9): counts and CPU time against N, and against the landed engine.
 
-    python benchmarks/bench_scale.py ramp100        # default ramp N = 100: new vs landed, same process
-    python benchmarks/bench_scale.py smooth         # geomspace(1, 30, 12), continuum wire, N = 100 … 10⁴
-    python benchmarks/bench_scale.py scale 100 1000 # default schedule, continuum wire: the scaling table
+    python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
+    python benchmarks/bench_scale.py smooth          # geomspace(1, 30, 12), N = 100 … 10⁴
+    python benchmarks/bench_scale.py scale 100 1000  # default schedule: the scaling table
     python benchmarks/bench_scale.py lbfgs          # one stage: Newton vs SciPy L-BFGS-B
     python benchmarks/bench_scale.py cold           # N = 10⁴ from the straight wire at λ = 200
 
@@ -22,11 +22,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, os.path.dirname(__file__))
 
+import legacy_newton
 import numpy as np
 from scipy.optimize import minimize as scipy_minimize
 from threadpoolctl import threadpool_limits
 
-import legacy_newton
 from crumple.energy import WireEnergy
 from crumple.geometry import has_crossings, node_segment_pairs
 from crumple.minimize import max_force
@@ -73,8 +73,8 @@ def bench_ramp100(repeat: int = 3):
     print(f"  new   : {tn:.3f} s CPU, {its} iterations, {fac / its:.2f} factorisations each, "
           f"{tn / its * 1e3:.3f} ms per iteration, all converged: {r.converged}, "
           f"E_final = {r.stages[-1].energy.total:.10f}")  # fmt: skip
-    print(f"  landed: {to:.3f} s CPU, {old_its} iterations, {old_fac / old_its:.2f} factorisations "
-          f"each, {to / old_its * 1e3:.3f} ms per iteration, all converged: "
+    print(f"  landed: {to:.3f} s CPU, {old_its} iterations, {old_fac / old_its:.2f} "
+          f"factorisations each, {to / old_its * 1e3:.3f} ms per iteration, all converged: "
           f"{all(s.converged for s in old)}, E_final = {old[-1].energy:.10f}")  # fmt: skip
     print(f"  speed-up (CPU, median of {repeat}): {to / tn:.2f}x")
 
@@ -87,13 +87,16 @@ def bench_smooth():
         its = [s.result.iterations for s in r.stages]
         bent = [s.energy.bending > 1e-3 for s in r.stages].index(True)
         print(f"  N = {n:6d}: {sum(its):4d} iterations {its}, buckled at stage {bent} "
-              f"(λ = {ramp.lambdas[bent]:.3g}), {t:.2f} s CPU, converged {r.converged}")  # fmt: skip
+              f"(λ = {ramp.lambdas[bent]:.3g}), {t:.2f} s CPU, "
+              f"converged {r.converged}")  # fmt: skip
 
 
 def bench_scale(ns):
     print("== default schedule (44 stages), continuum B = 0.05, S = 5000, seed 0 ==")
-    print("  N | d | smooth its/stage | contact its/stage | ms CPU/iteration | factorisations/it "
-          "| max RSS GiB | ramp CPU s | converged | contacts at the last stage")
+    print(
+        "  N | d | smooth its/stage | contact its/stage | ms CPU/iteration | factorisations/it "
+        "| max RSS GiB | ramp CPU s | converged | contacts at the last stage"
+    )
     for n in ns:
         wire = continuum_wire(n)
         r, t = cpu(lambda wire=wire: run_ramp(wire, seed=0))

@@ -10,6 +10,7 @@ H + 1e-13 max(diag H) I positive definite. The Hessian is assembled as it was (C
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import scipy.linalg as sla
@@ -319,8 +320,6 @@ def _escape(fun, x, e, g, h, max_step, feasible):
             return xt, float(et), gt, nfev
         d = 0.5 * d
     return None, e, g, nfev
-
-
 
 
 def _legacy_hessian(energy, x, project_contacts=False):

@@ -34,7 +34,9 @@ def test_solve_and_inertia_match_dense_linear_algebra(seed, n, density):
     if f.negative == 0:
         b = rng.standard_normal(n)
         x = f.solve(b)
-        np.testing.assert_allclose((dense + sigma * np.eye(n)) @ x, b, atol=1e-8 * (1 + np.abs(x).max()))
+        np.testing.assert_allclose(
+            (dense + sigma * np.eye(n)) @ x, b, atol=1e-8 * (1 + np.abs(x).max())
+        )
 
 
 def test_positive_definite_chain_solves_to_round_off():

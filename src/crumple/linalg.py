@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from numba import njit
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-__all__ = ["Factorization", "LDLT"]
+__all__ = ["LDLT", "Factorization"]
 
 
 # --------------------------------------------------------------------------------------------

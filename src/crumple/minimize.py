@@ -383,7 +383,7 @@ def _metric(metric, x) -> np.ndarray:
 
 
 def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step):
-    """Cap, cut and backtrack the step ``p``; update ``st`` and its trust radius. None or why not."""
+    """Cap, cut and backtrack the step ``p``; update ``st`` and its radius; None or why not."""
     slope = float(np.vdot(st.g, p))
     if not (slope < 0 and np.all(np.isfinite(p))):
         return "the Newton step is not a descent direction (numerical breakdown)"
@@ -396,7 +396,8 @@ def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_s
         safe = step_limit(st.x, alpha * p)
         if safe < 1.0:
             alpha *= 0.8 * safe
-    for halvings in range(max_backtracks):
+    halvings = 0
+    for _ in range(max_backtracks):
         xt = st.x + alpha * p
         et, gt = fun(xt)
         st.nfev += 1
@@ -409,10 +410,11 @@ def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_s
             if (sufficient or roundoff) and (feasible is None or feasible(xt)):
                 break
         alpha *= 0.5
+        halvings += 1
     else:
         return f"line search failed at max force {st.fmax:.3g}"
     moved = alpha * biggest
-    if halvings:  # shrink towards what worked, by 8 at most: a poor direction is not a radius
+    if halvings:  # shrink towards what worked, by 4 at most: a poor direction is not a radius
         st.radius = max(moved, st.radius / RADIUS_SHRINK)
     elif max_step is not None:  # accepted at once: let it grow to 4 times the step
         st.radius = min(max(st.radius, RADIUS_GROW * moved), max_step)
