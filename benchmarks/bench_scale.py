@@ -3,8 +3,9 @@
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
     python benchmarks/bench_scale.py smooth          # geomspace(1, 30, 12), N = 100 … 10⁴
     python benchmarks/bench_scale.py scale 100 1000  # default schedule: the scaling table
-    python benchmarks/bench_scale.py lbfgs          # one stage: Newton vs SciPy L-BFGS-B
-    python benchmarks/bench_scale.py cold           # N = 10⁴ from the straight wire at λ = 200
+    python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
+    python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
+    python benchmarks/bench_scale.py compare         # stage energies, new vs landed
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -150,6 +151,27 @@ def bench_cold(n: int = 10_000, lam: float = 200.0, maxiter: int = 2000):
           f"converged {r.converged}: {r.message}")  # fmt: skip
 
 
+def bench_compare():
+    print("== stage energies of default-schedule ramps (N = 100, seed 0): new vs landed ==")
+    from crumple.model import Plasticity
+
+    wires = {
+        "k_b = 5, k_s = 5e5": Wire(k_b=5, k_s=5e5),
+        "k_b = 1, k_s = 1e4": Wire(k_b=1, k_s=1e4),
+        "plastic s = 0.2": Wire(k_b=5, k_s=5e5, plasticity=Plasticity(s=0.2, theta_p=0.3)),
+    }
+    lams = default_schedule()
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label, wire in wires.items():
+            new = np.array([s.energy.total for s in run_ramp(wire, seed=0).stages])
+            old = np.array([r.energy for r in legacy_newton.legacy_run_ramp(wire, lams, seed=0)])
+            rel = np.abs(new - old) / np.abs(old)
+            differ = [(lam, a, b) for lam, a, b, x in zip(lams, new, old, rel, strict=True)
+                      if x > 1e-6]  # fmt: skip
+            print(f"  {label}: {len(differ)} stages differ by > 1e-6, largest {rel.max():.2g}; "
+                  f"new lower at {sum(a < b for _, a, b in differ)} of them")  # fmt: skip
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -162,5 +184,7 @@ if __name__ == "__main__":
         bench_lbfgs()
     elif what == "cold":
         bench_cold()
+    elif what == "compare":
+        bench_compare()
     else:
         raise SystemExit(__doc__)
