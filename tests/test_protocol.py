@@ -462,7 +462,7 @@ SMOOTH = Ramp(lambdas=tuple(np.geomspace(1.0, 30.0, 12)))
 
 def test_newton_iterations_do_not_grow_with_n():
     """The same smooth stages at N = 100 and 2000 (before contacts): the trust radius is a
-    length, so a finer wire takes about as many steps. Measured: 137 and 159 iterations
+    length, so a finer wire takes about as many steps. Measured: 137 and 158 iterations
     (the landed engine, with its cap of half a segment: 25 / 200 per stage at N = 100 / 1000)."""
     totals = {}
     for n in (100, 2000):

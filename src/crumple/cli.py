@@ -532,7 +532,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=["newton", "powell"], help="minimiser (default newton)")
     p.add_argument("--ftol", type=float, help="equilibrium tolerance on node forces")
     p.add_argument("--maxiter", type=int, help="iterations per stage")
-    p.add_argument("--max-step", type=float, help="largest node step / segment length")
+    p.add_argument("--max-step", type=float, help="largest node step per Newton iteration [length]")
     p.add_argument("--initial-noise", type=float, help="initial transverse noise / segment")
     p.add_argument("--stage-noise", type=float, help="random kick per stage / segment")
     p.add_argument("--stop-tol", type=float, help="stop when nodes move less than this")
