@@ -133,7 +133,7 @@ def newton(
     max_escapes: int = 20,
     callback: Callable[[int, np.ndarray, float, float], None] | None = None,
 ) -> MinimizeResult:
-    """Minimise ``fun`` by Newton's method with a modified LDLᵀ and an adaptive step cap.
+    """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
     **About one factorisation per iteration.** Each iteration factorises the exact Hessian H
     by a sparse LDLᵀ (:class:`crumple.linalg.LDLT`, symbolic analysis reused). Where it is
