@@ -210,8 +210,19 @@ def _phi_hessian(vx, vy):
 
 
 @njit(cache=True)
+def _project_psd(block):
+    """Replace a symmetric block by its positive part, in place."""
+    wv, vv = np.linalg.eigh(block)
+    if wv[0] >= 0.0:
+        return
+    for a in range(wv.shape[0]):
+        wv[a] = max(wv[a], 0.0)
+    block[:, :] = (vv * wv) @ vv.T
+
+
+@njit(cache=True)
 def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
-                      project):  # fmt: skip
+                      project, project_bending=False):  # fmt: skip
     n = pos.shape[0]
     size = 36 * (n - 2) + 16 * (n - 1) + 2 * n + 36 * ks.shape[0]
     rows = np.empty(size, dtype=np.int64)
@@ -252,6 +263,8 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
                 block6[2 + u, 4 + v] -= cb
                 block6[4 + u, 2 + v] -= cb
                 block6[4 + u, 4 + v] += cb
+        if project_bending:
+            _project_psd(block6)
         nodes3[0], nodes3[1], nodes3[2] = i - 1, i, i + 1
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     # stretching: k_s [u uᵀ + (1 - l0/L)(I - u uᵀ)] on the segment vector
@@ -294,7 +307,12 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
         dist, t, vx, vy = _point_segment(
             pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
         )
+        nodes3[0], nodes3[1], nodes3[2] = k, j, j + 1
         if dist <= 0.0 or dist >= width:
+            # a candidate outside the core: zeros, so that the pattern is that of the neighbour
+            # list and does not change while the list holds (fixed-pattern assembly)
+            block6[:, :] = 0.0
+            m = _put_block(rows, cols, vals, m, nodes3, block6)
             continue
         _, d1b, d2b = _barrier(dist / width)
         c2 = strength * d2b / (width * width)
@@ -335,11 +353,7 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
             # keep the positive part only: the negative curvature of a contact is a geometric
             # effect of its force, and left in it forces a large global shift that stalls
             # Newton on the wire's soft modes (docs/model.md)
-            wv, vv = np.linalg.eigh(block6)
-            for a in range(6):
-                wv[a] = max(wv[a], 0.0)
-            block6 = (vv * wv) @ vv.T
-        nodes3[0], nodes3[1], nodes3[2] = k, j, j + 1
+            _project_psd(block6)
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     return rows[:m], cols[:m], vals[:m]
 
@@ -579,6 +593,7 @@ class WireEnergy:
         self.skin = 0.1 * wire.rest_length if skin is None else float(skin)
         self._ref = None
         self._ks = self._js = None
+        self._pattern = None
         self.rebuilds = 0
 
     def _pairs(self, x):
@@ -610,13 +625,27 @@ class WireEnergy:
         self._eg(x)
         return EnergyTerms(*(float(v) for v in self._terms))
 
-    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
+    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False,
+                project_bending: bool = False):  # fmt: skip
+        """Hessian over ``x.ravel()``: dense (2n, 2n) or sparse CSC holding both triangles.
+
+        The sparse one is assembled into a fixed pattern (chain + every candidate pair of the
+        neighbour list, inactive pairs as explicit zeros), rebuilt only with the list: no
+        COO to CSC conversion per call, and its index arrays are equal from call to call, so a
+        factorisation can reuse its symbolic analysis (:class:`crumple.linalg.LDLT`).
+
+        ``project_contacts`` / ``project_bending`` replace every contact's / every joint's block
+        by its positive part: the Newton minimiser's fallback where the exact Hessian is
+        indefinite. The stretching blocks stay exact: their negative transverse stiffness
+        under compression is what makes a straight wire buckle, and the fallback must keep it.
+        """
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
         ks, js = self._pairs(x)
         rows, cols, vals = _hessian_triplets(
             x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
             self.weights, ks, js, w.hard_core, w.hard_core_energy, project_contacts,
+            project_bending,
         )  # fmt: skip
         ndof = x.size
         if dense is None:
@@ -624,7 +653,25 @@ class WireEnergy:
         if dense:
             h = np.bincount(rows * ndof + cols, weights=vals, minlength=ndof * ndof)
             return h.reshape(ndof, ndof)
-        return sp.csc_matrix((vals, (rows, cols)), shape=(ndof, ndof))
+        if self._pattern is None or not (
+            self._pattern[0] is ks
+            or (np.array_equal(self._pattern[0], ks) and np.array_equal(self._pattern[1], js))
+        ):  # a rebuilt neighbour list often holds the same pairs: keep the pattern then
+            self._pattern = (ks, js, *_csc_pattern(rows, cols, ndof))
+        _, _, indptr, indices, where = self._pattern
+        data = np.bincount(where, weights=vals, minlength=indices.shape[0])
+        return sp.csc_matrix((data, indices, indptr), shape=(ndof, ndof), copy=False)
+
+
+def _csc_pattern(rows, cols, ndof):
+    """CSC pattern (indptr, indices) of the triplets, and the entry each triplet adds to."""
+    key = cols * ndof + rows
+    uniq, where = np.unique(key, return_inverse=True)
+    index = np.int32 if uniq.shape[0] < 2**31 - 1 else np.int64
+    indices = (uniq % ndof).astype(index)
+    indptr = np.zeros(ndof + 1, dtype=index)
+    np.cumsum(np.bincount(uniq // ndof, minlength=ndof), out=indptr[1:])
+    return indptr, indices, where
 
 
 def energy_terms(wire: Wire, positions, lam: float, *, rest_angles=None) -> EnergyTerms:

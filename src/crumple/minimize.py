@@ -5,12 +5,16 @@ The variables are an array ``x`` of shape ``(n, dim)`` (or ``(n,)``); the *force
 
     converged  ⇔  max_i |grad[i]| <= ftol        (Euclidean norm over the row)
 
-:func:`newton` is the default: a Newton method with a Levenberg shift that keeps the
-model Hessian positive definite, an Armijo backtracking line search, an optional cap on the
-displacement of any row per step, and two hooks through which a caller keeps the iterates
-admissible: ``step_limit(x, p)`` (the largest safe fraction of a step, e.g. continuous collision
-detection) and ``feasible(x)`` (an exact test of an accepted point). An accepted step never
-raises the energy.
+(for :func:`newton`, or below the force's floating-point resolution when ftol is finer than
+float64 coordinates can resolve: see :attr:`MinimizeResult.force_resolution`).
+
+:func:`newton` is the default: a Newton method on a sparse LDLᵀ whose symbolic analysis is
+reused (:mod:`crumple.linalg`), with a fallback where the Hessian is indefinite, an adaptive
+trust radius on the displacement of any row (a length), an Armijo backtracking line search, a
+stability test by exact inertia count in a caller-given metric, and two hooks through which a
+caller keeps the iterates admissible: ``step_limit(x, p)`` (the largest safe fraction of a
+step, e.g. continuous collision detection) and ``feasible(x)`` (an exact test of an accepted
+point). An accepted step never raises the energy beyond its floating-point resolution.
 
 :func:`powell` wraps SciPy's derivative-free Powell method with a seeded random set of
 initial directions, the method of the paper; it is reported on the same criterion.
@@ -23,16 +27,19 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.linalg.lapack import dpotrf as _potrf
-from scipy.linalg.lapack import dpotrs as _potrs
 from scipy.optimize import minimize as _scipy_minimize
+
+from .linalg import LDLT
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
 
 _EPS = float(np.finfo(float).eps)
+RADIUS_SHRINK = 4.0
+RESOLUTION_FACTOR = 10.0
+RADIUS_GROW = 4.0
+SKIP_MAX = 8
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -49,6 +56,12 @@ class MinimizeResult:
         max_i |grad[i]| at ``x``.
     iterations, evaluations, hessian_evaluations : int
         Outer iterations; energy-and-gradient (or energy-only, for Powell) calls; Hessians.
+    factorizations : int
+        Sparse LDLᵀ factorisations (Newton: one per iteration, plus the stability tests).
+    force_resolution : float
+        Newton: the force change a one-ulp move of the coordinates can make (times 10): the
+        floor below which forces are round-off. ``converged`` means
+        ``max_force <= max(ftol, force_resolution)``; the message says which held.
     converged : bool
         ``max_force <= ftol``.
     ftol : float
@@ -68,6 +81,8 @@ class MinimizeResult:
     ftol: float
     message: str
     method: str
+    factorizations: int = 0
+    force_resolution: float = 0.0
 
 
 def max_force(grad) -> float:
@@ -84,32 +99,6 @@ def max_force(grad) -> float:
 
 def _row_norms(p):
     return np.abs(p) if p.ndim == 1 else np.sqrt(np.einsum("ij,ij->i", p, p))
-
-
-def _factor(h, shift):
-    """Factorise h + shift I if positive definite; return a solver or None."""
-    if sp.issparse(h):
-        a = (h + shift * sp.identity(h.shape[0], format="csc")).tocsc()
-        try:
-            lu = spla.splu(
-                a,
-                permc_spec="MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                options={"SymmetricMode": True},
-            )
-        except RuntimeError:  # exactly singular
-            return None
-        # symmetric pivoting makes this an LDLᵀ: positive pivots ⇔ positive definite (Sylvester)
-        if not (np.all(lu.perm_r == lu.perm_c) and np.all(lu.U.diagonal() > 0)):
-            return None
-        return lu.solve
-    a = np.array(h, dtype=np.float64, order="F")  # LAPACK factorises in place
-    if shift:
-        a.flat[:: a.shape[0] + 1] += shift
-    c, info = _potrf(a, lower=False, overwrite_a=True, clean=False)
-    if info != 0 or not np.all(np.isfinite(np.diagonal(c))):
-        return None
-    return lambda b: _potrs(c, b, lower=False)[0]
 
 
 def _validate_common(x0, ftol, maxiter):
@@ -138,27 +127,40 @@ def newton(
     feasible: Callable[[np.ndarray], bool] | None = None,
     armijo: float = 1e-4,
     max_backtracks: int = 40,
-    curvature_tol: float = 1e-13,
+    curvature_tol: float = 1e-8,
+    metric=None,
+    zero_modes: Callable[[np.ndarray], np.ndarray] | None = None,
     max_escapes: int = 20,
     callback: Callable[[int, np.ndarray, float, float], None] | None = None,
 ) -> MinimizeResult:
-    """Minimise ``fun`` by a shifted Newton method with a backtracking line search.
+    """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
-    Each iteration factorises ``H + μ s I`` (``s`` the largest diagonal entry of H) by Cholesky
-    (dense) or by LDLᵀ-pivoted sparse LU, raising μ from 0 (or a tenth of the last successful
-    value) until the matrix is positive definite, so the step is always a descent direction.
-    The step is scaled so that no row moves further than ``max_step``, then cut to 0.8 of
-    ``step_limit(x, p)`` when that is below 1, then halved until the Armijo condition holds
-    and ``feasible`` accepts the point. Near convergence the decrease of the energy falls below
-    its floating-point resolution ``16 ε_mach |E|``; a step is then accepted when its energy
-    change lies within that resolution and it strictly lowers the largest force (the
-    approximate Wolfe condition of Hager & Zhang, 2005). So an accepted step never raises the
-    energy by more than ``resolution(E)``.
+    **About one factorisation per iteration.** Each iteration factorises the exact Hessian H
+    by a sparse LDLᵀ (:class:`crumple.linalg.LDLT`, symbolic analysis reused). Where it is
+    positive definite (every pivot above ``curvature_tol × metric``) this is Newton's step.
+    Where it is not, the step is that of ``hess_fallback`` (a positive definite approximation),
+    and the next few iterations use the fallback directly before trying H again. Without a
+    fallback, the pivots below the floor are raised as the factorisation goes (modified LDLᵀ).
 
-    A point where the forces vanish is accepted as a minimum only if ``H + τ s I`` is positive
-    definite (τ = ``curvature_tol``): at a saddle (the straight wire above its buckling load,
-    say) the solver steps along the eigenvector of the most negative eigenvalue, downhill, and
-    goes on. Zero modes of a symmetry (a rigid rotation in an isotropic trap) pass the test.
+    **Trust radius in the units of x.** No row moves further than a radius Δ per step: Δ starts
+    at ``max_step``, shrinks to the displacement that was accepted when the line search had
+    to backtrack, and doubles back towards ``max_step`` after a capped step accepted at once.
+    It is a length in the caller's units, so it means the same whatever the number of rows.
+    The step is then cut to 0.8 of ``step_limit(x, p)`` when that is below 1, and halved until
+    the Armijo condition holds and ``feasible`` accepts the point. Near convergence the
+    decrease of the energy falls below its floating-point resolution ``16 ε_mach |E|``; a step
+    is then accepted when its energy change lies within that resolution and it strictly
+    lowers the largest force (the approximate Wolfe condition of Hager & Zhang, 2005). So an
+    accepted step never raises the energy by more than ``resolution(E)``.
+
+    **Stability.** A point where the forces vanish is accepted as a minimum only if
+    ``H + τ M`` is positive definite, τ = ``curvature_tol`` and M = diag(``metric``): no
+    eigenvalue of the pencil (H, M) below -τ. This is an exact inertia count of one LDLᵀ
+    (Sylvester's law), not an eigensolver's estimate; τ is absolute, in the units of H per
+    unit of the metric, and does not scale with the size or the stiffest entry of H. At a
+    saddle (the straight wire above its buckling load, say) the solver steps downhill along
+    the lowest mode of (H, M) (LOBPCG, preconditioned by the modified factor) and goes on.
+    Zero modes of a symmetry (a rigid rotation in an isotropic trap) pass the test.
 
     Parameters
     ----------
@@ -167,23 +169,37 @@ def newton(
     x0 : array_like, shape (n, dim) or (n,)
         Start; must be admissible (``feasible(x0)``).
     hess : callable
-        ``hess(x)`` -> Hessian over ``x.ravel()``: dense ndarray or SciPy sparse matrix.
+        ``hess(x)`` -> Hessian over ``x.ravel()``: dense ndarray or SciPy sparse matrix. A
+        sparse one whose index arrays do not change between calls is analysed once.
     hess_fallback : callable, optional
-        A positive semi-definite-leaning approximation used (with the shift) whenever the
-        exact Hessian is not positive definite; the exact one is always tried first, so
-        convergence near a stable minimum stays quadratic.
+        A positive (semi-)definite approximation, in the same pattern, used where the exact
+        Hessian is not positive definite (e.g. every element block projected on its positive
+        part). Without it the modified factorisation of H is the fallback.
     ftol : float
         Convergence tolerance on the largest row force ``[energy/length]``.
     maxiter : int
         Newton iterations at most.
     max_step : float, optional
-        Largest displacement of any row in one step.
+        Largest displacement of any row in one step (the largest trust radius), in the units
+        of ``x``. None: no cap.
     step_limit : callable, optional
         ``step_limit(x, p) -> t`` in (0, 1]: the fraction of ``p`` that is safe to take.
     feasible : callable, optional
         ``feasible(x) -> bool``, checked on every point before it is accepted.
     curvature_tol : float
-        Relative tolerance τ of the stability test at convergence.
+        τ, the stability tolerance (absolute, units of H / metric), and the pivot floor of the
+        modified factorisation.
+    metric : array_like, optional
+        Positive weight of every row (shape ``(n,)``) or entry (shape ``x.size``) of x: the
+        mass matrix M of the stability test, e.g. the length each node stands for, so that
+        the eigenvalues of (H, M) are those of the continuum and independent of n. Default 1.
+    zero_modes : callable, optional
+        ``zero_modes(x) -> array (k, x.size)``: directions along which the energy is invariant
+        (a rigid rotation about the centre of an isotropic trap). The stability test and the
+        escape work in their M-orthogonal complement: such a mode's curvature is zero in
+        exact arithmetic but only zero to round-off in H, which at large n exceeds any useful
+        τ (measured: -0.06 per unit length for the rotation of a straight wire at N = 10⁴).
+        Inertia of H + τM restricted to the complement: neg(H + τM) - neg(Wᵀ(H + τM)⁻¹W).
     max_escapes : int
         Steps along negative curvature allowed before giving up on stability.
     callback : callable, optional
@@ -204,177 +220,301 @@ def newton(
     x = _validate_common(x0, ftol, maxiter)
     if max_step is not None and not (max_step > 0):
         raise ValueError(f"max_step must be positive, got {max_step}")
+    if not (math.isfinite(curvature_tol) and curvature_tol > 0):
+        raise ValueError(f"curvature_tol must be positive, got {curvature_tol}")
+    m = _metric(metric, x)
     if feasible is not None and not feasible(x):
         raise ValueError("the starting point is not feasible")
     e, g = fun(x)
-    nfev, nhev = 1, 0
     if not math.isfinite(e):
         raise ValueError(f"the energy at the starting point is {e}")
-    fmax = max_force(g)
-    mu = 0.0
+    st = _State(x=x, e=float(e), g=g, fmax=max_force(g))
+    st.radius = math.inf if max_step is None else float(max_step)
+    ldl = LDLT()
+    floor = curvature_tol * m
     message = "maximum number of iterations reached"
-    it = 0
     escapes = 0
     unstable = False
     while True:
-        if fmax <= ftol:
-            h = hess(x)
-            nhev += 1
-            scale = _diag_scale(h)
-            if _factor(h, curvature_tol * scale) is not None:
-                message = f"converged: max force {fmax:.3g} <= {ftol:.3g}"
+        if st.fmax <= max(ftol, st.fres):
+            h = hess(st.x)
+            st.nhev += 1
+            st.fres = _force_resolution(h, st.x)
+        if st.fmax <= max(ftol, st.fres):
+            check = ldl.factorize(h, shift=floor)
+            modes = _modes(zero_modes, st.x, m)
+            if _negative_count(check, modes) == 0:
+                message = f"converged: max force {st.fmax:.3g} <= {ftol:.3g}"
+                if st.fmax > ftol:
+                    message = (
+                        f"converged to the force resolution: max force {st.fmax:.3g} <= "
+                        f"{st.fres:.3g}, the force change of a one-ulp move ({ftol:.3g} is "
+                        "below what float64 positions resolve)"
+                    )
                 break
             if escapes >= max_escapes:
                 unstable = True
                 message = f"stopped at an unstable equilibrium after {escapes} escapes"
                 break
-            step = _escape(fun, x, e, g, h, max_step, feasible)
-            nfev += step[3]
-            if step[0] is None:
+            if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible):
                 unstable = True
                 message = "stopped at an equilibrium with negative curvature that no step lowers"
                 break
-            x, e, g = step[:3]
-            fmax = max_force(g)
             escapes += 1
             if callback is not None:
-                callback(it, x, e, fmax)
+                callback(st.it, st.x, st.e, st.fmax)
             continue
-        if it >= maxiter:
+        if st.it >= maxiter:
             break
-        it += 1
-        h = hess(x)
-        nhev += 1
-        solve = _factor(h, 0.0)
-        if solve is not None:
-            mu = 0.0
-        else:
-            # the median, not the largest, diagonal entry sets the shift's scale: a few very
-            # stiff rows (contacts) must not make the shift swamp the soft modes
-            scale = _diag_scale(h, np.median)
-            if hess_fallback is not None:
-                h = hess_fallback(x)
-                nhev += 1
-            mu = mu / 10.0 if mu > 1e-14 else 0.0
-            solve = _factor(h, mu * scale)
-        while solve is None:
-            mu = max(10.0 * mu, 1e-12)
-            if mu > 1e12:
-                break
-            solve = _factor(h, mu * scale)
-        if solve is None:
-            message = "could not make the Hessian positive definite"
+        st.it += 1
+        p = _direction(st, hess, hess_fallback, ldl, floor, m)
+        if not np.all(np.isfinite(p)):
+            message = "could not make the Hessian positive definite (non-finite factor)"
             break
-        p = -solve(g.ravel()).reshape(x.shape)
-        slope = float(np.vdot(g, p))
-        if not (slope < 0 and np.all(np.isfinite(p))):
-            message = "the Newton step is not a descent direction (numerical breakdown)"
+        failure = _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step)
+        if failure:
+            message = failure
             break
-        alpha = 1.0
-        if max_step is not None:
-            biggest = float(np.max(_row_norms(p)))
-            if biggest > max_step:
-                alpha = max_step / biggest
-        if step_limit is not None:
-            safe = step_limit(x, alpha * p)
-            if safe < 1.0:
-                alpha *= 0.8 * safe
-        accepted = False
-        for _ in range(max_backtracks):
-            xt = x + alpha * p
-            et, gt = fun(xt)
-            nfev += 1
-            if math.isfinite(et):
-                sufficient = et <= e + armijo * alpha * slope
-                # below the energy's floating-point resolution only the force can tell a
-                # better point (Hager & Zhang's approximate Wolfe condition)
-                roundoff = et <= e + resolution(e) and max_force(gt) < fmax
-                if (sufficient or roundoff) and (feasible is None or feasible(xt)):
-                    accepted = True
-                    break
-            alpha *= 0.5
-            mu = max(mu, 1e-10)  # a failed full step: bias the next ones towards gradient
-        if not accepted:
-            message = f"line search failed at max force {fmax:.3g} (> {ftol:.3g})"
-            break
-        x, e, g = xt, float(et), gt
-        fmax = max_force(g)
         if callback is not None:
-            callback(it, x, e, fmax)
+            callback(st.it, st.x, st.e, st.fmax)
     if escapes and not unstable:
         message += f" ({escapes} saddle escape{'s' if escapes > 1 else ''})"
     return MinimizeResult(
-        x=x,
-        energy=float(e),
-        max_force=fmax,
-        iterations=it,
-        evaluations=nfev,
-        hessian_evaluations=nhev,
-        converged=fmax <= ftol and not unstable,
+        x=st.x,
+        energy=st.e,
+        max_force=st.fmax,
+        iterations=st.it,
+        evaluations=st.nfev,
+        hessian_evaluations=st.nhev,
+        converged=st.fmax <= max(ftol, st.fres) and not unstable,
         ftol=ftol,
         message=message,
         method="newton",
+        factorizations=ldl.factorizations,
+        force_resolution=st.fres,
     )
 
 
-def _diag_scale(h, how=np.max) -> float:
-    diag = np.abs(h.diagonal())
-    scale = float(how(diag)) if diag.size else 1.0
-    return scale if scale > 0 else 1.0
+@dataclass(slots=True)
+class _State:
+    """The iterate and the bookkeeping of :func:`newton`."""
+
+    x: np.ndarray
+    e: float
+    g: np.ndarray
+    fmax: float
+    radius: float = math.inf
+    it: int = 0
+    nfev: int = 1
+    nhev: int = 0
+    fres: float = 0.0
+    skip: int = 0
+    skip_left: int = 0
+    sigma: float = 0.0
 
 
-def _lowest_mode(h):
-    """A unit vector of (most) negative curvature of a symmetric matrix, and its curvature.
+def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
+    """The Newton step of the exact Hessian if it is positive definite, else a fallback's.
 
-    Dense: LAPACK's lowest eigenpair. Sparse: inverse iteration on h + μ I with μ the smallest
-    power-of-ten multiple of the diagonal scale that makes it positive definite (ARPACK's
-    smallest-algebraic mode does not converge on these stiff matrices); it only has to find
-    a direction of negative curvature, which it does as soon as the Rayleigh quotient is < 0.
+    The fallback is ``hess_fallback`` (or H itself) shifted by σM, σ the smallest of 0, half
+    the last one, or twice the negative curvature its factor revealed, that makes it positive
+    definite (a Levenberg-Marquardt step in the metric M). A region of global negative
+    curvature (the buckling of a straight wire) keeps it: the shifted step moves far along the
+    unstable mode. After the exact Hessian has been found indefinite, the next ``st.skip``
+    iterations go straight to the fallback (1, 2, 4, 8 after successive failures; 0 after a
+    success), so that such a region costs about one factorisation per iteration.
     """
-    if not sp.issparse(h):
-        vals, vecs = sla.eigh(h, subset_by_index=[0, 0])
-        return float(vals[0]), vecs[:, 0]
-    scale = _diag_scale(h)
-    mu, solve = 1e-12, None
-    while solve is None and mu <= 1e3:
-        solve = _factor(h, mu * scale)
-        mu *= 10.0
-    if solve is None:
-        return 0.0, np.zeros(h.shape[0])
-    v = np.random.default_rng(0).standard_normal(h.shape[0])  # fixed: results reproducible
-    v /= np.linalg.norm(v)
-    rq = float(v @ (h @ v))
-    for _ in range(100):
-        v = solve(v)
-        v /= np.linalg.norm(v)
-        new = float(v @ (h @ v))
-        if new < 0 and abs(new - rq) <= 1e-6 * abs(new):
-            rq = new
-            break
-        rq = new
-    return rq, v
+    g = st.g.ravel()
+    if st.skip_left > 0:
+        st.skip_left -= 1
+    else:
+        st.nhev += 1
+        h = hess(st.x)
+        st.fres = _force_resolution(h, st.x)
+        f = ldl.factorize(h, floor=floor)
+        if f.modified == 0:
+            st.skip = 0
+            return -f.solve(g).reshape(st.x.shape)
+        if hess_fallback is not None:
+            st.skip = min(max(1, 2 * st.skip), SKIP_MAX)
+            st.skip_left = st.skip
+    h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
+    st.nhev += 1
+    hs = h if sp.issparse(h) else sp.csc_matrix(h)
+    sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
+    for _ in range(60):
+        f = ldl.factorize(hs, shift=sigma * m, floor=floor)
+        if f.modified == 0:
+            st.sigma = sigma
+            return -f.solve(g).reshape(st.x.shape)
+        v = f.negative_direction()
+        mu = float(v @ (hs @ v)) / float(v @ (m * v)) if v is not None else 0.0
+        sigma = max(2.0 * sigma, -2.0 * mu, floor[0] / m[0])
+    st.sigma = sigma
+    return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
 
 
-def _escape(fun, x, e, g, h, max_step, feasible):
-    """Step downhill along the most negative curvature: (x, e, g, evaluations) or (None, ...)."""
-    lam, v = _lowest_mode(h)
-    if not lam < 0:
-        return None, e, g, 0
-    d = v.reshape(x.shape)
-    if float(np.vdot(g, d)) > 0:
+def _force_resolution(h, x) -> float:
+    """``RESOLUTION_FACTOR`` × max_i Σ_j |H_ij| ulp(x_j): how much the force on a row can change
+    when the coordinates move by one unit in the last place. Below it the force is noise: a
+    stiff wire of 10⁴ nodes at |x| ~ 0.5 cannot be brought below ~2e-5 (measured, B = 0.05)."""
+    u = np.spacing(np.abs(x)).ravel()
+    if sp.issparse(h) and h.format == "csc" and h.shape[0] == h.shape[1] and h.nnz:
+        # column sums of |H| u[row], = row sums by symmetry: no new sparse matrix
+        r = np.bincount(
+            np.repeat(np.arange(h.shape[1]), np.diff(h.indptr)),
+            weights=np.abs(h.data) * u[h.indices], minlength=h.shape[1],
+        )  # fmt: skip
+    else:
+        r = (abs(h) if sp.issparse(h) else np.abs(np.asarray(h))) @ u
+    return RESOLUTION_FACTOR * float(np.max(r)) if r.size else 0.0
+
+
+def _metric(metric, x) -> np.ndarray:
+    """The metric as one positive weight per entry of ``x.ravel()``."""
+    if metric is None:
+        return np.ones(x.size)
+    w = np.asarray(metric, dtype=np.float64).ravel()
+    if x.ndim == 2 and w.size == x.shape[0]:
+        w = np.repeat(w, x.shape[1])
+    if w.size != x.size or not np.all(np.isfinite(w)) or not np.all(w > 0):
+        raise ValueError(f"metric must hold {x.size} (or one per row) positive weights")
+    return w
+
+
+def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step):
+    """Cap, cut and backtrack the step ``p``; update ``st`` and its radius; None or why not."""
+    slope = float(np.vdot(st.g, p))
+    if not (slope < 0 and np.all(np.isfinite(p))):
+        return "the Newton step is not a descent direction (numerical breakdown)"
+    biggest = float(np.max(_row_norms(p)))
+    alpha = 1.0
+    capped = biggest > st.radius
+    if capped:
+        alpha = st.radius / biggest
+    if step_limit is not None:
+        safe = step_limit(st.x, alpha * p)
+        if safe < 1.0:
+            alpha *= 0.8 * safe
+    halvings = 0
+    for _ in range(max_backtracks):
+        xt = st.x + alpha * p
+        et, gt = fun(xt)
+        st.nfev += 1
+        if math.isfinite(et):
+            sufficient = et <= st.e + armijo * alpha * slope
+            # below the energy's floating-point resolution only the force can tell a
+            # better point (Hager & Zhang's approximate Wolfe condition)
+            ft = max_force(gt)
+            roundoff = et <= st.e + resolution(st.e) and ft < st.fmax
+            if (sufficient or roundoff) and (feasible is None or feasible(xt)):
+                break
+        alpha *= 0.5
+        halvings += 1
+    else:
+        return f"line search failed at max force {st.fmax:.3g}"
+    moved = alpha * biggest
+    if halvings:  # shrink towards what worked, by 4 at most: a poor direction is not a radius
+        st.radius = max(moved, st.radius / RADIUS_SHRINK)
+    elif max_step is not None:  # accepted at once: let it grow to 4 times the step
+        st.radius = min(max(st.radius, RADIUS_GROW * moved), max_step)
+    st.x, st.e, st.g, st.fmax = xt, float(et), gt, ft
+    return None
+
+
+def _row_norms(p):
+    return np.abs(p) if p.ndim == 1 else np.sqrt(np.einsum("ij,ij->i", p, p))
+
+
+def _modes(zero_modes, x, m):
+    """The zero modes as the columns of an (x.size, k) array, or None."""
+    if zero_modes is None:
+        return None
+    w = np.asarray(zero_modes(x), dtype=np.float64).reshape(-1, x.size).T
+    return w if w.shape[1] else None
+
+
+def _negative_count(f, modes) -> int:
+    """Negative eigenvalues of the factored (unmodified) matrix A in the A-complement of the
+    modes W: neg(A) - neg(Wᵀ A⁻¹ W) (Haynsworth's inertia additivity, A + βWWᵀ as β → ∞)."""
+    if f.negative == 0 or modes is None:
+        return f.negative
+    s = modes.T @ np.column_stack([f.solve(w) for w in modes.T])
+    return f.negative - int(np.sum(np.linalg.eigvalsh(0.5 * (s + s.T)) < 0))
+
+
+def _deflate(v, modes, m):
+    """v with its M-projection on the modes removed."""
+    if modes is None:
+        return v
+    mw = m[:, None] * modes
+    return v - modes @ np.linalg.solve(modes.T @ mw, mw.T @ v)
+
+
+def _lowest_mode(h, m, ldl, check, floor, modes=None):
+    """Lowest eigenpair estimate (μ, v) of the pencil (H, M), from a factor with a negative pivot.
+
+    The start is the factor's own direction of negative curvature (Pᵀ L⁻ᵀ e_k); LOBPCG,
+    preconditioned by the modified factor of H, improves it towards the lowest mode (the
+    buckling mode, not a local wiggle). The direction returned always has vᵀHv < 0.
+    """
+    v0 = check.negative_direction()
+    if v0 is None:
+        return 0.0, None
+    hs = sp.csc_matrix(h) if not sp.issparse(h) else h
+    n = hs.shape[0]
+    v0 = _deflate(v0, modes, m)
+    mu0 = _rayleigh(hs, m, v0)
+    if n < 8:
+        return mu0, v0
+    pre = ldl.factorize(hs, floor=floor)
+    rng = np.random.default_rng(0)  # fixed: results reproducible
+    block = _deflate(np.column_stack([v0, rng.standard_normal((n, 2))]), modes, m)
+    try:
+        vals, vecs = spla.lobpcg(
+            hs, block, B=sp.diags(m), M=spla.LinearOperator((n, n), matvec=pre.solve),
+            Y=modes, largest=False, maxiter=60, tol=1e-4 * math.sqrt(n), verbosityLevel=0,
+        )  # fmt: skip
+    except (np.linalg.LinAlgError, ValueError):  # pragma: no cover - keep the pivot direction
+        return mu0, v0
+    v = _deflate(vecs[:, int(np.argmin(vals))], modes, m)
+    mu = _rayleigh(hs, m, v)
+    return (mu, v) if mu < mu0 else (mu0, v0)
+
+
+def _rayleigh(h, m, v) -> float:
+    den = float(v @ (m * v))
+    return float(v @ (h @ v)) / den if den > 0 else 0.0
+
+
+def _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible) -> bool:
+    """Step downhill along the lowest mode from an unstable equilibrium; False if no step can."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # LOBPCG's "did not converge" is not an error here
+        mu, v = _lowest_mode(h, m, ldl, check, floor, modes)
+    if v is None or not mu < 0:
+        return False
+    d = v.reshape(st.x.shape)
+    if float(np.vdot(st.g, d)) > 0:
         d = -d
     biggest = float(np.max(_row_norms(d)))
-    length = max_step if max_step is not None else 1e-3 * (1.0 + float(np.max(np.abs(x))))
+    length = st.radius if math.isfinite(st.radius) else 1e-3 * (1.0 + float(np.max(np.abs(st.x))))
     d = d * (length / biggest)
-    nfev = 0
-    for _ in range(30):
-        xt = x + d
+    if step_limit is not None:
+        safe = step_limit(st.x, d)
+        if safe < 1.0:
+            d = 0.8 * safe * d
+    for _ in range(40):
+        xt = st.x + d
         et, gt = fun(xt)
-        nfev += 1
-        if math.isfinite(et) and et < e and (feasible is None or feasible(xt)):
-            return xt, float(et), gt, nfev
+        st.nfev += 1
+        if math.isfinite(et) and et < st.e and (feasible is None or feasible(xt)):
+            st.x, st.e, st.g, st.fmax = xt, float(et), gt, max_force(gt)
+            return True
         d = 0.5 * d
-    return None, e, g, nfev
+    return False
 
 
 def resolution(energy: float) -> float:

@@ -28,19 +28,21 @@ from typing import Literal
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .energy import EnergyTerms, WireEnergy
+from .energy import EnergyTerms, WireEnergy, confinement_weights
 from .geometry import has_crossings, max_safe_fraction
 from .minimize import MinimizeResult, newton, powell
 from .model import Wire
 
 __all__ = [
     "PAPER_LAMBDAS",
+    "STABILITY_TOL",
     "Ramp",
     "RampResult",
     "Stage",
     "default_schedule",
     "initial_state",
     "minimize_wire",
+    "node_lengths",
     "replica_seeds",
     "run_ramp",
     "run_replicas",
@@ -48,6 +50,14 @@ __all__ = [
 
 #: The trap strengths shown in the paper's Fig. 2.
 PAPER_LAMBDAS = (70.0, 200.0, 300.0, 1000.0)
+
+#: Stability tolerance τ ``[energy/length³]``: an equilibrium is accepted as a minimum when no
+#: eigenvalue of the Hessian per unit length (the pencil (H, M), M the length of wire each node
+#: stands for, :func:`node_lengths`) lies below -τ. Per unit length, the eigenvalues are those
+#: of the continuum wire: the confinement alone contributes 2λ (λ >= 1 in the paper), the
+#: straight wire just above its Euler load has -4 to -27 (N = 10⁴, λ = 7 to 12.6). τ is far
+#: below both and far above round-off (docs/model.md, "Minimisation to equilibrium").
+STABILITY_TOL = 1e-3
 
 Method = Literal["newton", "powell"]
 
@@ -102,7 +112,10 @@ class Ramp:
         of an imperfect wire can take ~1300 Newton iterations through a region of negative
         curvature (measured); the perfect default ramp needs at most ~350 per stage.
     max_step : float
-        Largest node displacement per Newton step, in units of the segment rest length.
+        Largest node displacement per Newton step ``[length]``: the largest trust radius of
+        :func:`crumple.minimize.newton`, which adapts below it. A length, independent of N
+        (before issue 9 it was in units of the segment length, which made the number of
+        steps grow as N). Default 0.5 L0: effectively the adaptive radius alone.
 
     Examples
     --------
@@ -280,7 +293,7 @@ def minimize_wire(
         Equilibrium tolerance on the largest node force ``[energy/length]``.
     maxiter : int
     max_step : float
-        Newton: largest node displacement per step in units of the segment rest length.
+        Newton: largest node displacement per step ``[length]`` (the largest trust radius).
     rng : numpy.random.Generator
         Powell's random directions (required for Powell).
     rest_angles : array_like, shape (wire.n_nodes - 2,), optional
@@ -307,13 +320,18 @@ def minimize_wire(
         return newton(
             energy,
             x0,
-            hess=energy.hessian,
-            hess_fallback=lambda x: energy.hessian(x, project_contacts=True),
+            hess=lambda x: energy.hessian(x, dense=False),
+            # contacts projected on their positive part; bending and stretching exact (measured:
+            # projecting the joints too doubled the iterations of the default ramp)
+            hess_fallback=lambda x: energy.hessian(x, dense=False, project_contacts=True),
             ftol=ftol,
             maxiter=maxiter,
-            max_step=max_step * wire.rest_length,
+            max_step=max_step,
             step_limit=max_safe_fraction,
             feasible=feasible,
+            curvature_tol=STABILITY_TOL,
+            metric=node_lengths(wire),
+            zero_modes=lambda x: _symmetry_modes(x, wire.trap_center, lam),
         )
     if method == "powell":
         if rng is None:
@@ -328,6 +346,23 @@ def minimize_wire(
             maxiter=maxiter,
         )
     raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
+
+
+def node_lengths(wire: Wire) -> np.ndarray:
+    """The length of wire each node stands for, shape (n_nodes,) ``[length]``: L0/N inside,
+    L0/(2N) at the two ends. The metric of the stability test: with it the eigenvalues of the
+    Hessian are those of the continuum wire, independent of N."""
+    return confinement_weights(wire.n_nodes, "per-length", wire.length)
+
+
+def _symmetry_modes(x, center, lam):
+    """Rigid motions that leave the energy unchanged: the rotation about the trap's centre
+    (the trap is isotropic), and the two translations when there is no trap."""
+    r = x - np.asarray(center)
+    modes = [np.column_stack([-r[:, 1], r[:, 0]]).ravel()]
+    if lam == 0:
+        modes += [np.tile([1.0, 0.0], len(x)), np.tile([0.0, 1.0], len(x))]
+    return np.array(modes)
 
 
 ProgressCallback = Callable[[int, int, Stage], None]

@@ -488,7 +488,7 @@ _FLAGS = [
     ("--ftol", float, "equilibrium: largest node force [energy/length] (default 1e-6)"),
     ("--maxiter", int, "budget per stage: Newton iterations (default 5000) or Powell sweeps "
      f"(default {POWELL_MAXITER})"),
-    ("--max-step", float, "largest Newton node step [segment lengths] (default 0.5)"),
+    ("--max-step", float, "largest Newton node step, the trust radius cap [length] (default 0.5)"),
     ("--initial-noise", float,
      "transverse noise of the initial wire [segment lengths] (default 0.01)"),
     ("--stage-noise", float, "random kick before every stage [segment lengths] (default 0)"),

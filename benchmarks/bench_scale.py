@@ -1,0 +1,190 @@
+"""The engine at scale (issue 9): counts and CPU time against N, and against the landed engine.
+
+    python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
+    python benchmarks/bench_scale.py smooth          # geomspace(1, 30, 12), N = 100 … 10⁴
+    python benchmarks/bench_scale.py scale 100 1000  # default schedule: the scaling table
+    python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
+    python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
+    python benchmarks/bench_scale.py compare         # stage energies, new vs landed
+
+CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
+printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
+Results are recorded in docs/performance.md.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import sys
+import time
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, os.path.dirname(__file__))
+
+import legacy_newton
+import numpy as np
+from scipy.optimize import minimize as scipy_minimize
+from threadpoolctl import threadpool_limits
+
+from crumple.energy import WireEnergy
+from crumple.geometry import has_crossings, node_segment_pairs
+from crumple.minimize import max_force
+from crumple.model import Wire
+from crumple.protocol import Ramp, default_schedule, initial_state, minimize_wire, run_ramp
+
+CONTINUUM = {"bending": 0.05, "stretching": 5000.0}
+
+
+def hard_core_for(n: int) -> float:
+    """The hard-core rule of the scaling runs: d = min(10⁻⁵, L0 / (10 N)), so that d stays
+    below a tenth of the segment length (at N = 10⁵ the segment is 10⁻⁵ long)."""
+    return min(1e-5, 0.1 / n)
+
+
+def continuum_wire(n: int) -> Wire:
+    return Wire.from_continuum(**CONTINUUM, n_segments=n, hard_core=hard_core_for(n))
+
+
+def cpu(fn):
+    t0 = time.process_time()
+    out = fn()
+    return out, time.process_time() - t0
+
+
+def bench_ramp100(repeat: int = 3):
+    print("== default ramp, N = 100 (k_b = 5, k_s = 5e5, 44 stages, seed 0): new vs landed ==")
+    wire = Wire(k_b=5, k_s=5e5)
+    run_ramp(wire, Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
+    with threadpool_limits(limits=1, user_api="blas"):
+        legacy_newton.legacy_run_ramp(wire, (1.0, 100.0), seed=0)
+        new_t, old_t = [], []
+        for _ in range(repeat):
+            r, t = cpu(lambda: run_ramp(wire, seed=0))
+            new_t.append(t)
+            legacy_newton.FACTORIZATIONS[0] = 0
+            old, t = cpu(lambda: legacy_newton.legacy_run_ramp(wire, default_schedule(), seed=0))
+            old_t.append(t)
+    its = sum(s.result.iterations for s in r.stages)
+    fac = sum(s.result.factorizations for s in r.stages)
+    old_its = sum(s.iterations for s in old)
+    old_fac = legacy_newton.FACTORIZATIONS[0]
+    tn, to = float(np.median(new_t)), float(np.median(old_t))
+    print(f"  new   : {tn:.3f} s CPU, {its} iterations, {fac / its:.2f} factorisations each, "
+          f"{tn / its * 1e3:.3f} ms per iteration, all converged: {r.converged}, "
+          f"E_final = {r.stages[-1].energy.total:.10f}")  # fmt: skip
+    print(f"  landed: {to:.3f} s CPU, {old_its} iterations, {old_fac / old_its:.2f} "
+          f"factorisations each, {to / old_its * 1e3:.3f} ms per iteration, all converged: "
+          f"{all(s.converged for s in old)}, E_final = {old[-1].energy:.10f}")  # fmt: skip
+    print(f"  speed-up (CPU, median of {repeat}): {to / tn:.2f}x")
+
+
+def bench_smooth():
+    print("== smooth stages: geomspace(1, 30, 12), continuum B = 0.05, S = 5000, seed 0 ==")
+    ramp = Ramp(lambdas=tuple(np.geomspace(1.0, 30.0, 12)))
+    for n in (100, 1000, 2000, 10_000):
+        r, t = cpu(lambda n=n: run_ramp(continuum_wire(n), ramp, seed=0))
+        its = [s.result.iterations for s in r.stages]
+        bent = [s.energy.bending > 1e-3 for s in r.stages].index(True)
+        print(f"  N = {n:6d}: {sum(its):4d} iterations {its}, buckled at stage {bent} "
+              f"(λ = {ramp.lambdas[bent]:.3g}), {t:.2f} s CPU, "
+              f"converged {r.converged}")  # fmt: skip
+
+
+def bench_scale(ns):
+    print("== default schedule (44 stages), continuum B = 0.05, S = 5000, seed 0 ==")
+    print(
+        "  N | d | smooth its/stage | contact its/stage | ms CPU/iteration | factorisations/it "
+        "| max RSS GiB | ramp CPU s | converged | contacts at the last stage"
+    )
+    for n in ns:
+        wire = continuum_wire(n)
+        r, t = cpu(lambda wire=wire: run_ramp(wire, seed=0))
+        smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
+        contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
+        its = sum(s.result.iterations for s in r.stages)
+        fac = sum(s.result.factorizations for s in r.stages)
+        last = r.stages[-1].positions
+        pairs = len(node_segment_pairs(last, wire.hard_core)[0])
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+        print(f"  {n} | {wire.hard_core:.0e} | {np.mean(smooth) if smooth else 0:.1f} "
+              f"({len(smooth)} stages) | {np.mean(contact) if contact else 0:.1f} "
+              f"({len(contact)} stages) | {t / its * 1e3:.2f} | {fac / its:.2f} | {rss:.2f} | "
+              f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
+              f"{pairs}", flush=True)  # fmt: skip
+
+
+def bench_lbfgs():
+    print("== one stage (λ = 70 from the λ = 59.9 equilibrium, default wire, N = 100) ==")
+    wire = Wire(k_b=5, k_s=5e5)
+    lams = default_schedule()
+    i = lams.index(70.0)
+    prev = run_ramp(wire, Ramp(lambdas=lams[:i]), seed=0).stages[-1].positions
+    f = WireEnergy(wire, 70.0)
+    rn, tn = cpu(lambda: minimize_wire(wire, prev, 70.0))
+    ro, to = cpu(lambda: legacy_newton.legacy_minimize_wire(wire, prev, 70.0))
+
+    def fun(z):
+        e, g = f(z.reshape(-1, 2))
+        return e, g.ravel()
+
+    opts = {"maxiter": 20000, "maxfun": 40000, "gtol": 1e-6, "ftol": 1e-16}
+    rl, tl = cpu(lambda: scipy_minimize(fun, prev.ravel(), jac=True, method="L-BFGS-B",
+                                        options=opts))  # fmt: skip
+    xl = rl.x.reshape(-1, 2)
+    print(f"  newton (new)   : {tn:.4f} s  {rn.iterations:5d} its  E = {rn.energy:.10f}  "
+          f"max force {rn.max_force:.1e}")  # fmt: skip
+    print(f"  newton (landed): {to:.4f} s  {ro.iterations:5d} its  E = {ro.energy:.10f}  "
+          f"max force {ro.max_force:.1e}")  # fmt: skip
+    print(f"  L-BFGS-B       : {tl:.4f} s  {rl.nit:5d} its  E = {rl.fun:.10f}  max force "
+          f"{max_force(f(xl)[1]):.1e}  ({'crosses itself' if has_crossings(xl) else 'no crossing'};"
+          f" {rl.message})  time / new Newton {tl / tn:.0f}x")  # fmt: skip
+
+
+def bench_cold(n: int = 10_000, lam: float = 200.0, maxiter: int = 2000):
+    print(f"== cold start: N = {n}, straight wire + noise, λ = {lam}, no ramp ==")
+    wire = continuum_wire(n)
+    x = initial_state(wire, seed=0)
+    r, t = cpu(lambda: minimize_wire(wire, x, lam, maxiter=maxiter))
+    print(f"  {t:.1f} s CPU, {r.iterations} iterations, max force {r.max_force:.3g}, "
+          f"converged {r.converged}: {r.message}")  # fmt: skip
+
+
+def bench_compare():
+    print("== stage energies of default-schedule ramps (N = 100, seed 0): new vs landed ==")
+    from crumple.model import Plasticity
+
+    wires = {
+        "k_b = 5, k_s = 5e5": Wire(k_b=5, k_s=5e5),
+        "k_b = 1, k_s = 1e4": Wire(k_b=1, k_s=1e4),
+        "plastic s = 0.2": Wire(k_b=5, k_s=5e5, plasticity=Plasticity(s=0.2, theta_p=0.3)),
+    }
+    lams = default_schedule()
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label, wire in wires.items():
+            new = np.array([s.energy.total for s in run_ramp(wire, seed=0).stages])
+            old = np.array([r.energy for r in legacy_newton.legacy_run_ramp(wire, lams, seed=0)])
+            rel = np.abs(new - old) / np.abs(old)
+            differ = [(lam, a, b) for lam, a, b, x in zip(lams, new, old, rel, strict=True)
+                      if x > 1e-6]  # fmt: skip
+            print(f"  {label}: {len(differ)} stages differ by > 1e-6, largest {rel.max():.2g}; "
+                  f"new lower at {sum(a < b for _, a, b in differ)} of them")  # fmt: skip
+
+
+if __name__ == "__main__":
+    what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
+    if what == "ramp100":
+        bench_ramp100()
+    elif what == "smooth":
+        bench_smooth()
+    elif what == "scale":
+        bench_scale([int(v) for v in sys.argv[2:]] or [100, 1000])
+    elif what == "lbfgs":
+        bench_lbfgs()
+    elif what == "cold":
+        bench_cold()
+    elif what == "compare":
+        bench_compare()
+    else:
+        raise SystemExit(__doc__)

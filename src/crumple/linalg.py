@@ -1,0 +1,319 @@
+"""Sparse symmetric LDLᵀ for the Newton minimiser: symbolic analysis reused, inertia, modification.
+
+Nothing here knows what a wire is. A Newton iteration needs three things of its Hessian H,
+each from **one** factorisation:
+
+* the Newton step H⁻¹g when H is positive definite;
+* a descent step when it is not (Gill & Murray's idea: a *modified* LDLᵀ that raises every
+  pivot below a floor to ``max(|d_k|, floor_k)`` as it goes, so the factor is that of a
+  positive definite H + E with E zero whenever H is safely positive definite);
+* the inertia: by Sylvester's law the number of negative pivots of an unmodified LDLᵀ of
+  H + σ M is the number of eigenvalues of the pencil (H, M) below -σ. That is the stability
+  test of :func:`crumple.minimize.newton`, exact and without an eigensolver.
+
+The factorisation is the up-looking algorithm of QDLDL (Stellato, Banjac et al., OSQP), written
+in Numba: an elimination tree and column counts once per sparsity pattern (the *symbolic*
+analysis), then a numeric factorisation per call that only fills in values. No pivoting: a
+fill-reducing order is chosen once per pattern, the one with the fewest nonzeros in L among
+the natural order (optimal for a chain: a band) and SciPy's reverse Cuthill–McKee.
+
+A pattern is recognised by the identity of the CSC index arrays of the matrix (or, failing
+that, their contents), so a caller that assembles into a fixed pattern
+(:class:`crumple.energy.WireEnergy`) pays the analysis once per neighbour list.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numba import njit
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+__all__ = ["LDLT", "Factorization"]
+
+
+# --------------------------------------------------------------------------------------------
+# Kernels (upper-triangular CSC, diagonal included)
+# --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _etree(n, ap, ai):
+    """Elimination tree and the number of nonzeros of every column of L (QDLDL_etree)."""
+    work = np.zeros(n, dtype=np.int64)
+    lnz = np.zeros(n, dtype=np.int64)
+    parent = np.full(n, -1, dtype=np.int64)
+    for j in range(n):
+        work[j] = j
+        for p in range(ap[j], ap[j + 1]):
+            i = ai[p]
+            while work[i] != j:
+                if parent[i] == -1:
+                    parent[i] = j
+                lnz[i] += 1
+                work[i] = j
+                i = parent[i]
+    return parent, lnz
+
+
+@njit(cache=True)
+def _factor(n, ap, ai, ax, shift, floor, modify, parent, lp, li, lx, d, first, first_value):
+    """Numeric LDLᵀ of A + diag(shift) into (lp, li, lx, d); returns (negative, modified).
+
+    ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
+    a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
+    the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``.
+    """
+    marker = np.zeros(n, dtype=np.bool_)
+    yidx = np.empty(n, dtype=np.int64)
+    buf = np.empty(n, dtype=np.int64)
+    nxt = lp[:-1].copy()
+    y = np.zeros(n)
+    dinv = np.empty(n)
+    negative = 0
+    modified = 0
+    for k in range(n):
+        dk = shift[k]
+        nnzy = 0
+        for p in range(ap[k], ap[k + 1]):
+            b = ai[p]
+            if b == k:
+                dk += ax[p]
+                continue
+            y[b] = ax[p]
+            if not marker[b]:
+                marker[b] = True
+                buf[0] = b
+                ne = 1
+                c = parent[b]
+                while c != -1 and c < k:
+                    if marker[c]:
+                        break
+                    marker[c] = True
+                    buf[ne] = c
+                    ne += 1
+                    c = parent[c]
+                while ne > 0:
+                    ne -= 1
+                    yidx[nnzy] = buf[ne]
+                    nnzy += 1
+        for q in range(nnzy - 1, -1, -1):
+            c = yidx[q]
+            yc = y[c]
+            end = nxt[c]
+            for p in range(lp[c], end):
+                y[li[p]] -= lx[p] * yc
+            li[end] = k
+            lk = yc * dinv[c]
+            lx[end] = lk
+            dk -= yc * lk
+            nxt[c] = end + 1
+            y[c] = 0.0
+            marker[c] = False
+        if not dk > 0.0:  # also NaN
+            negative += 1
+        if modify and not dk >= floor[k]:
+            if modified == 0:
+                first[0] = k
+                first_value[0] = dk
+            modified += 1
+            dk = max(abs(dk), floor[k]) if dk == dk else floor[k]
+        d[k] = dk
+        dinv[k] = 1.0 / dk if dk != 0.0 else np.inf
+    return negative, modified
+
+
+@njit(cache=True)
+def _solve(n, lp, li, lx, d, perm, b):
+    """x = Pᵀ (L D Lᵀ)⁻¹ P b, with P b = b[perm]."""
+    x = np.empty(n)
+    for i in range(n):
+        x[i] = b[perm[i]]
+    for i in range(n):
+        xi = x[i]
+        for p in range(lp[i], lp[i + 1]):
+            x[li[p]] -= lx[p] * xi
+    for i in range(n):
+        x[i] /= d[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for p in range(lp[i], lp[i + 1]):
+            s -= lx[p] * x[li[p]]
+        x[i] = s
+    out = np.empty(n)
+    for i in range(n):
+        out[perm[i]] = x[i]
+    return out
+
+
+@njit(cache=True)
+def _unit_back_solve(n, lp, li, lx, perm, k):
+    """Pᵀ L⁻ᵀ e_k (back substitution from row k down)."""
+    x = np.zeros(n)
+    x[k] = 1.0
+    for i in range(k - 1, -1, -1):
+        s = x[i]
+        for p in range(lp[i], lp[i + 1]):
+            s -= lx[p] * x[li[p]]
+        x[i] = s
+    out = np.empty(n)
+    for i in range(n):
+        out[perm[i]] = x[i]
+    return out
+
+
+@njit(cache=True)
+def _gather(src, data, out):
+    for i in range(src.shape[0]):
+        out[i] = data[src[i]]
+
+
+# --------------------------------------------------------------------------------------------
+# Symbolic analysis and the factorisation object
+# --------------------------------------------------------------------------------------------
+
+
+class _Symbolic:
+    """A pattern's fill-reducing order, permuted upper pattern, elimination tree and L's shape."""
+
+    def __init__(self, a: sp.csc_matrix):
+        n = a.shape[0]
+        self.n = n
+        self.indptr, self.indices = a.indptr, a.indices
+        best = None
+        for perm in (np.arange(n), _rcm(a)):
+            ap, ai, src = _permuted_upper(a, perm)
+            parent, lnz = _etree(n, ap, ai)
+            total = int(lnz.sum())
+            if best is None or total < best[0]:
+                best = (total, perm, ap, ai, src, parent, lnz)
+        total, self.perm, self.ap, self.ai, self.src, self.parent, lnz = best
+        self.lp = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(lnz, out=self.lp[1:])
+        self.l_nnz = total
+
+    def matches(self, a) -> bool:
+        if a.indptr is self.indptr and a.indices is self.indices:
+            return True
+        return (
+            a.shape[0] == self.n
+            and a.indices.shape == self.indices.shape
+            and np.array_equal(a.indptr, self.indptr)
+            and np.array_equal(a.indices, self.indices)
+        )
+
+
+def _rcm(a) -> np.ndarray:
+    return np.asarray(reverse_cuthill_mckee(a.tocsr(), symmetric_mode=True), dtype=np.int64)
+
+
+def _permuted_upper(a, perm):
+    """Upper triangle of P A Pᵀ as CSC (int64), and where each of its entries is in ``a.data``."""
+    marks = sp.csc_matrix(
+        (np.arange(1, a.nnz + 1, dtype=np.float64), a.indices, a.indptr), shape=a.shape
+    )
+    b = sp.triu(marks[perm][:, perm], format="csc")
+    b.sort_indices()
+    # a missing diagonal entry is fine: the factorisation starts every pivot from the shift
+    src = b.data.astype(np.int64) - 1
+    return b.indptr.astype(np.int64), b.indices.astype(np.int64), src
+
+
+class Factorization:
+    """LDLᵀ of P (A + diag(shift)) Pᵀ, possibly modified.
+
+    Attributes
+    ----------
+    negative : int
+        Pivots <= 0 as computed: the number of eigenvalues of A + diag(shift) that are <= 0
+        (Sylvester), exact up to round-off, when ``modified == 0``.
+    modified : int
+        Pivots raised to their floor (0: this is the factor of the matrix itself).
+    """
+
+    __slots__ = ("_d", "_lx", "_sym", "first_modified", "modified", "negative")
+
+    def __init__(self, sym, lx, d, negative, modified):
+        self._sym, self._lx, self._d = sym, lx, d
+        self.negative, self.modified = int(negative), int(modified)
+
+    @property
+    def positive_definite(self) -> bool:
+        return self.negative == 0 and self.modified == 0
+
+    def solve(self, b) -> np.ndarray:
+        """(the factored matrix)⁻¹ b for a vector b of length n."""
+        s = self._sym
+        b = np.ascontiguousarray(b, dtype=np.float64).ravel()
+        return _solve(s.n, s.lp, s.ai_l, self._lx, self._d, s.perm, b)
+
+    def negative_direction(self) -> np.ndarray | None:
+        """A direction of low curvature: v = Pᵀ L⁻ᵀ e_k, for which vᵀ(A + diag(shift))v = d_k.
+
+        k is the first modified pivot of a modified factor (its value as computed, before the
+        modification: rows up to k of L do not depend on it), else the most negative pivot.
+        None when no pivot was modified or negative.
+        """
+        if self.modified:
+            k = self.first_modified
+        else:
+            k = int(np.argmin(self._d))
+            if not self._d[k] < 0:
+                return None
+        s = self._sym
+        return _unit_back_solve(s.n, s.lp, s.ai_l, self._lx, s.perm, k)
+
+
+class LDLT:
+    """A reusable sparse LDLᵀ: the symbolic analysis is redone only when the pattern changes.
+
+    Examples
+    --------
+    >>> a = sp.csc_matrix(np.array([[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]]))
+    >>> f = LDLT().factorize(a)
+    >>> f.positive_definite, np.allclose(a @ f.solve(np.ones(3)), 1.0)
+    (True, True)
+    >>> LDLT().factorize(a, shift=np.full(3, -2.5)).negative    # eigenvalues 1.27, 3, 4.73
+    1
+    """
+
+    def __init__(self):
+        self._sym: _Symbolic | None = None
+        self.analyses = 0
+        self.factorizations = 0
+
+    def symbolic(self, a) -> _Symbolic:
+        if self._sym is None or not self._sym.matches(a):
+            sym = _Symbolic(a)
+            sym.ai_l = np.empty(sym.l_nnz, dtype=np.int64)
+            self._sym = sym
+            self.analyses += 1
+        return self._sym
+
+    def factorize(self, a, *, shift=None, floor=None) -> Factorization:
+        """Factorise ``a + diag(shift)`` (a symmetric CSC matrix holding both triangles).
+
+        With ``floor`` (a vector), pivots below it are raised (modified LDLᵀ): the result is
+        always positive definite and solves a nearby positive definite system.
+        """
+        if not sp.issparse(a):
+            a = sp.csc_matrix(np.asarray(a, dtype=np.float64))
+        elif a.format != "csc":
+            a = a.tocsc()
+        s = self.symbolic(a)
+        n = s.n
+        ax = np.empty(s.src.shape[0])
+        _gather(s.src, np.ascontiguousarray(a.data, dtype=np.float64), ax)
+        sh = np.zeros(n) if shift is None else np.ascontiguousarray(shift, dtype=np.float64)[s.perm]
+        modify = floor is not None
+        fl = np.zeros(n) if floor is None else np.ascontiguousarray(floor, dtype=np.float64)[s.perm]
+        lx = np.empty(s.l_nnz)
+        d = np.empty(n)
+        first, first_value = np.full(1, -1, dtype=np.int64), np.zeros(1)
+        neg, mod = _factor(
+            n, s.ap, s.ai, ax, sh, fl, modify, s.parent, s.lp, s.ai_l, lx, d, first, first_value
+        )
+        self.factorizations += 1
+        f = Factorization(s, lx, d, neg, mod)
+        f.first_modified = int(first[0])
+        return f

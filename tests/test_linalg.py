@@ -1,0 +1,100 @@
+"""Tests of crumple.linalg: the sparse LDLᵀ against dense LAPACK, its inertia (Sylvester's law),
+the modified factorisation's descent property, and the reuse of the symbolic analysis."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crumple.linalg import LDLT
+
+
+def random_symmetric(rng, n, density, shift):
+    a = sp.random(n, n, density=density, random_state=rng)
+    a = (a + a.T).tocsc()
+    return (a + shift * sp.identity(n)).tocsc()
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 60), density=st.floats(0.01, 0.5))
+def test_solve_and_inertia_match_dense_linear_algebra(seed, n, density):
+    rng = np.random.default_rng(seed)
+    a = random_symmetric(rng, n, density, 0.0)
+    dense = a.toarray()
+    eig = np.linalg.eigvalsh(dense)
+    # a shift between two eigenvalues, well away from both: an unambiguous inertia
+    apart = np.diff(eig) > 1e-6 * (1.0 + np.abs(eig).max())
+    gaps = np.r_[eig[0] - 1.0, 0.5 * (eig[:-1] + eig[1:])[apart], eig[-1] + 1.0]
+    sigma = -float(rng.choice(gaps))
+    f = LDLT().factorize(a, shift=np.full(n, sigma))
+    assert f.negative == int(np.sum(eig + sigma < 0))
+    if f.negative == 0:
+        b = rng.standard_normal(n)
+        x = f.solve(b)
+        np.testing.assert_allclose(
+            (dense + sigma * np.eye(n)) @ x, b, atol=1e-8 * (1 + np.abs(x).max())
+        )
+
+
+def test_positive_definite_chain_solves_to_round_off():
+    n = 500
+    main = np.full(n, 4.0)
+    off = np.full(n - 1, -1.0)
+    a = sp.diags([off, main, off], [-1, 0, 1], format="csc")
+    f = LDLT().factorize(a)
+    assert f.positive_definite
+    b = np.arange(n, dtype=float)
+    np.testing.assert_allclose(a @ f.solve(b), b, rtol=0, atol=1e-10)
+
+
+def test_modified_factor_gives_a_descent_direction():
+    rng = np.random.default_rng(3)
+    a = random_symmetric(rng, 40, 0.2, -1.0)  # indefinite
+    f = LDLT().factorize(a, floor=np.full(40, 1e-3))
+    assert f.modified > 0
+    for _ in range(10):
+        g = rng.standard_normal(40)
+        assert g @ f.solve(g) > 0  # -solve(g) goes downhill
+
+
+def test_negative_direction_has_negative_curvature():
+    rng = np.random.default_rng(5)
+    a = random_symmetric(rng, 30, 0.3, -0.5)
+    f = LDLT().factorize(a)
+    assert f.negative > 0
+    v = f.negative_direction()
+    assert v @ (a @ v) < 0
+    g = LDLT().factorize(a, floor=np.full(30, 1e-6))
+    v = g.negative_direction()
+    assert v @ (a @ v) < 0
+
+
+def test_symbolic_analysis_is_reused_while_the_pattern_holds():
+    rng = np.random.default_rng(7)
+    a = random_symmetric(rng, 50, 0.1, 10.0)
+    solver = LDLT()
+    for k in range(5):
+        b = a.copy()
+        b.data = b.data * (1.0 + 0.1 * k)
+        solver.factorize(b)
+    assert solver.analyses == 1 and solver.factorizations == 5
+    solver.factorize(random_symmetric(rng, 50, 0.1, 10.0))
+    assert solver.analyses == 2
+
+
+def test_dense_input_is_accepted():
+    f = LDLT().factorize(np.array([[2.0, 1.0], [1.0, 2.0]]))
+    assert f.positive_definite
+    np.testing.assert_allclose(f.solve(np.array([3.0, 3.0])), [1.0, 1.0])
+
+
+@pytest.mark.parametrize("n", [10, 200])
+def test_reordering_keeps_a_chain_band_free_of_fill(n):
+    a = sp.diags([np.ones(n - 2), np.ones(n - 1), np.full(n, 5.0), np.ones(n - 1), np.ones(n - 2)],
+                 [-2, -1, 0, 1, 2], format="csc")  # fmt: skip
+    solver = LDLT()
+    solver.factorize(a)
+    assert solver.symbolic(a).l_nnz <= 2 * n
