@@ -83,8 +83,8 @@ def confinement_number(*, k_b, lam, n_segments, length=1.0) -> float:
     >>> confinement_number(k_b=1.0, lam=2000.0, n_segments=100)   # the paper's largest Λ
     200000.0
     """
-    return _pos("lam", lam) * _pos("length", length) ** 4 / bending_stiffness(
-        k_b, n_segments, length
+    return (
+        _pos("lam", lam) * _pos("length", length) ** 4 / bending_stiffness(k_b, n_segments, length)
     )
 
 
@@ -94,9 +94,11 @@ def lam_for(confinement, *, k_b, n_segments, length=1.0) -> float:
     >>> lam_for(20000.0, k_b=5.0, n_segments=100)
     1000.0
     """
-    return _pos("Λ", confinement) * bending_stiffness(k_b, n_segments, length) / _pos(
-        "length", length
-    ) ** 4
+    return (
+        _pos("Λ", confinement)
+        * bending_stiffness(k_b, n_segments, length)
+        / _pos("length", length) ** 4
+    )
 
 
 def loop_length(confinement, length=1.0) -> float:
@@ -183,7 +185,6 @@ def wire_point(
         "k_s": float(_pos("k_s", ks)),
         "n_segments": _n(n_segments),
         "lambdas": [
-            float(f"{lam_for(c, k_b=k_b, n_segments=n_segments, length=length):.12g}")
-            for c in lams
+            float(f"{lam_for(c, k_b=k_b, n_segments=n_segments, length=length):.12g}") for c in lams
         ],
     }

@@ -80,9 +80,7 @@ def _cmd_status(args) -> int:
 # --------------------------------------------------------------------------------------------
 
 
-def _finish_report(
-    out, quiet: bool, summary: dict | None = None, display=None, study=None
-) -> int:
+def _finish_report(out, quiet: bool, summary: dict | None = None, display=None, study=None) -> int:
     from ..reproduce import write_report
 
     display = JobProgress(quiet) if display is None else display

@@ -79,8 +79,7 @@ def _read_profile(out: Path, study=None) -> dict:
     path = out / PROFILE_FILE
     if not path.exists():
         raise ValueError(
-            f"{out} holds no {what} ({PROFILE_FILE} missing); run `{command} "
-            f"--out {out}` first"
+            f"{out} holds no {what} ({PROFILE_FILE} missing); run `{command} --out {out}` first"
         )
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))

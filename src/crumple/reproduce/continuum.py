@@ -73,9 +73,8 @@ PROFILES = MappingProxyType(
     {
         "smoke": ContinuumProfile(
             name="smoke",
-            description="SMOKE PROFILE (tests only): N ≤ 100 (the Fig. 5 points at N = 40), Λ ≤ 10⁴, 2 "
-            "disorder replicas; "
-            "the numbers mean nothing",
+            description="SMOKE PROFILE (tests only): N ≤ 100 (the Fig. 5 points at N = 40), "
+            "Λ ≤ 10⁴, 2 disorder replicas; the numbers mean nothing",
             replicas=2,
             confinements=_geom(1e2, 1e4, 5),
             collapse_points=((1.0, 25), (4.0, 25), (1.0, 50), (2.0, 50), (1.0, 100)),
@@ -92,8 +91,15 @@ PROFILES = MappingProxyType(
             "replicas; no power-law range is expected at these sizes",
             replicas=3,
             confinements=_geom(1e2, 1e5, 10),
-            collapse_points=((1.0, 50), (4.0, 50), (1.0, 100), (4.0, 100), (1.0, 200),
-                             (3.0, 200), (1.0, 400)),  # fmt: skip
+            collapse_points=(
+                (1.0, 50),
+                (4.0, 50),
+                (1.0, 100),
+                (4.0, 100),
+                (1.0, 200),
+                (3.0, 200),
+                (1.0, 400),
+            ),
             fig5_n=100,
             fig5_lambdas=_geom(1.0, 2000.0, 12),
             sweep_n=200,
@@ -106,8 +112,15 @@ PROFILES = MappingProxyType(
             "N-independent engine of issue 9 (not run yet)",
             replicas=5,
             confinements=_geom(1e2, 1e8, 25),
-            collapse_points=((1.0, 100), (4.0, 100), (1.0, 300), (1.0, 1000), (3.0, 1000),
-                             (1.0, 3000), (1.0, 10000)),  # fmt: skip
+            collapse_points=(
+                (1.0, 100),
+                (4.0, 100),
+                (1.0, 300),
+                (1.0, 1000),
+                (3.0, 1000),
+                (1.0, 3000),
+                (1.0, 10000),
+            ),
             fig5_n=100,
             fig5_lambdas=_geom(1.0, 2000.0, 40),
             sweep_n=10000,
@@ -121,8 +134,7 @@ PROFILES = MappingProxyType(
 def _collapse(profile: ContinuumProfile) -> Sweep:
     """(k_b, N) points ramped through the same Λ, k_s stiff (strain ≤ 1e-3 at Λ_max)."""
     pts = [
-        wire_point(profile.confinements, n_segments=n, k_b=kb)
-        for kb, n in profile.collapse_points
+        wire_point(profile.confinements, n_segments=n, k_b=kb) for kb, n in profile.collapse_points
     ]
     return Sweep(wire={"confinement": "per-length"}, points=pts, replicas=1, seed=SEED)
 
@@ -162,9 +174,7 @@ COLLAPSE = Experiment(
 #: The paper's six Fig. 3/Fig. 5 (k_b, k_s), ramped in λ, to be replotted against Λ.
 FIG5 = Experiment(name="continuum_fig5", levels=("k_b", "k_s"), build=_fig5)
 #: The Λ sweep: disorder replicas.
-SWEEP = Experiment(
-    name="continuum_sweep", levels=(), build=lambda profile: _sweep(profile, True)
-)
+SWEEP = Experiment(name="continuum_sweep", levels=(), build=lambda profile: _sweep(profile, True))
 #: The Λ sweep: the perfect wire.
 PERFECT = Experiment(
     name="continuum_perfect", levels=(), build=lambda profile: _sweep(profile, False)

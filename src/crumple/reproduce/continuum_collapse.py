@@ -44,7 +44,7 @@ QUANTITIES = ("R_g/L", "r_max/L", "E_b L/B", "E_conf L/B", "γ", "contacts/N", "
 
 
 def _n_of(key) -> int:
-    return int(round(float(key[2])))
+    return round(float(key[2]))
 
 
 def point_curves(s: Series, replica: int = 0) -> list[dict]:
@@ -67,8 +67,10 @@ def point_curves(s: Series, replica: int = 0) -> list[dict]:
                     "R_g/L": r[ok],
                     "r_max/L": s.obs["r_max"][p, replica][ok],
                     # straight stages: E_b is round-off (NaN, as γ; stage_observables.STRAIGHT)
-                    "E_b L/B": np.where(s.obs["straight"][p, replica], np.nan,
-                                        s.energies["bending"][p, replica])[ok] / b,
+                    "E_b L/B": np.where(
+                        s.obs["straight"][p, replica], np.nan, s.energies["bending"][p, replica]
+                    )[ok]
+                    / b,
                     "E_conf L/B": s.energies["confinement"][p, replica][ok] / b,
                     "γ": s.obs["gamma"][p, replica][ok],
                     "contacts/N": s.obs["contacts"][p, replica][ok] / n,
@@ -180,7 +182,9 @@ def measure(ctx: Context) -> Record:
                 _alt(
                     f"collapse of {q}, largest over Λ",
                     variant,
-                    Estimate(_max(v[key]), math.nan, len(curves), (float(grid[0]), float(grid[-1]))),
+                    Estimate(
+                        _max(v[key]), math.nan, len(curves), (float(grid[0]), float(grid[-1]))
+                    ),
                     1,
                 )
             )
@@ -189,8 +193,7 @@ def measure(ctx: Context) -> Record:
     after = _log_scatter({k: (c["Lambda"], c["r_max"]) for k, c in f5.items()})
     collapses = bool(np.isfinite(after) and after <= before / 3 and after <= 0.05)
     claim = {
-        "claim": "the paper's Fig. 5 curves (six (k_b, k_s), N = 100) collapse against "
-        "Λ = λN/k_b",
+        "claim": "the paper's Fig. 5 curves (six (k_b, k_s), N = 100) collapse against Λ = λN/k_b",
         "source": "issue 12: 'The curves in Fig. 5a for k_b = 1 (two values of k_s) lie on "
         "top of each other'",
         "measured": f"scatter of ln r_max across the six curves {before:.3f} against λ, "
@@ -201,8 +204,9 @@ def measure(ctx: Context) -> Record:
     extra = {
         "continuum_collapse": {
             "confinements": grid,
-            "spreads": {q: {k: v[k] for k in ("all", "same_n", "discretisation")}
-                        for q, v in sp.items()},  # fmt: skip
+            "spreads": {
+                q: {k: v[k] for k in ("all", "same_n", "discretisation")} for q, v in sp.items()
+            },
             "n_coarse": rg["n_coarse"],
             "fig5_scatter_lambda": before,
             "fig5_scatter_Lambda": after,

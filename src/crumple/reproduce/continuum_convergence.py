@@ -87,9 +87,7 @@ def measure(ctx: Context) -> Record:
         "claim": f"N-convergence rule: segments per loop size ℓ/Δs = NΛ^-1/4 for a relative "
         f"R_g error below {100 * tol:g}%",
         "source": "issue 12: 'state the N needed per Λ, as a rule: segments per ℓ'",
-        "measured": (
-            f"ℓ/Δs ≥ {rule:.3g}" if math.isfinite(rule) else "not reached at the N run"
-        )
+        "measured": (f"ℓ/Δs ≥ {rule:.3g}" if math.isfinite(rule) else "not reached at the N run")
         + f" (N = {', '.join(map(str, ns))} against N = {n_max}; Λ = {grid[0]:.3g} … "
         f"{grid[-1]:.3g})",
         "criterion": f"every (Λ, N < {n_max}) with at least that ℓ/Δs has an error below "

@@ -145,9 +145,13 @@ def measure(ctx: Context) -> Record:
     x_sl, sl = _local_slopes(lam_c, mean_r)
     nrep = s.replicas
     reps = f"{nrep} disorder replicas"
-    no_range = "" if power_law else (
-        f"; NO POWER-LAW RANGE: r_max/ℓ = {ratio:.2g} < {MIN_DECADE:g} (less than a decade "
-        "between ℓ and R)"
+    no_range = (
+        ""
+        if power_law
+        else (
+            f"; NO POWER-LAW RANGE: r_max/ℓ = {ratio:.2g} < {MIN_DECADE:g} (less than a decade "
+            "between ℓ and R)"
+        )
     )
     rows = [
         _row(ALPHA.key, alpha, reps, f"N = {n:g}, k_b = {kb:g}; local exponents from "
@@ -180,8 +184,7 @@ def measure(ctx: Context) -> Record:
             "source": "Fig. 5 caption; Sec. III.C",
             "measured": f"α = {alpha.value:.3f} ± {alpha.sigma:.3f} over Λ ∈ [{win[0]:.3g}, "
             f"{win[1]:.3g}]; r_max/R_dense at Λ_max = {mean_r[j] / r_dense:.3g}",
-            "criterion": "|α + 0.25| ≤ 2σ; dense packing would give α → 0 with r_max → "
-            "(Ld/π)^1/2",
+            "criterion": "|α + 0.25| ≤ 2σ; dense packing would give α → 0 with r_max → (Ld/π)^1/2",
             "verdict": verdict(rows[0]),
         },
         {
@@ -200,11 +203,15 @@ def measure(ctx: Context) -> Record:
             "measured": f"our trap-confined D_M = {dm.value:.3f} ± {dm.sigma:.3f}",
             "criterion": "where ours stands: below, within or above 1.9 ± 0.1 (2σ combined)",
             "verdict": (
-                "not measured" if not np.isfinite(dm.value)
-                else "below" if dm.value + 2 * math.hypot(dm.sigma, 0.1) < 1.9
-                else "above" if dm.value - 2 * math.hypot(dm.sigma, 0.1) > 1.9
+                "not measured"
+                if not np.isfinite(dm.value)
+                else "below"
+                if dm.value + 2 * math.hypot(dm.sigma, 0.1) < 1.9
+                else "above"
+                if dm.value - 2 * math.hypot(dm.sigma, 0.1) > 1.9
                 else "within"
-            ) + ("" if power_law else "; no power-law range"),
+            )
+            + ("" if power_law else "; no power-law range"),
         },
         {
             "claim": "ε_l = 0.5",
@@ -321,10 +328,13 @@ def discuss(rec: Record, records) -> dict[str, str]:
     out = {
         DM.key: (
             f"r_max/ℓ = {ex['r_max_over_ell']:.3g} at the largest Λ: "
-            + ("the fit spans at least a decade." if pl else
-               "less than a decade between the loop size and the radius, so there is no "
-               "power-law range to measure D_M on; the number is a slope over a short range, "
-               "not a dimension.")
+            + (
+                "the fit spans at least a decade."
+                if pl
+                else "less than a decade between the loop size and the radius, so there is no "
+                "power-law range to measure D_M on; the number is a slope over a short range, "
+                "not a dimension."
+            )
         ),
         ALPHA.key: (
             "α is fitted over the top two decades of Λ run; the local exponent (figure) shows "

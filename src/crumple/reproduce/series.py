@@ -57,7 +57,9 @@ def _point_keys(ds, levels) -> list[tuple]:
         return [()]
     idx = ds.indexes["point"]
     return (
-        [tuple(_label(v) for v in t) for t in idx] if len(levels) > 1 else [(_label(v),) for v in idx]
+        [tuple(_label(v) for v in t) for t in idx]
+        if len(levels) > 1
+        else [(_label(v),) for v in idx]
     )
 
 
