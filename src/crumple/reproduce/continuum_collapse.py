@@ -12,6 +12,7 @@ discretisation error as its σ), one claim (do the paper's curves collapse again
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -94,11 +95,21 @@ def on_grid(curves: list[dict], grid, name: str) -> np.ndarray:
     return out
 
 
+def nan_quiet(f, *args, **kw):
+    """``f(*args, **kw)`` (a NaN-aware NumPy reduction) without the warning of an all-NaN
+    slice: a stage no point reached, or a straight stage's E_b, is NaN by design."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "All-NaN slice|Mean of empty slice", RuntimeWarning)
+        return f(*args, **kw)
+
+
 def _spread(v: np.ndarray) -> np.ndarray:
     """(max − min)/|mean| over axis 0 (NaN-aware; NaN where fewer than 2 values)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         n = np.sum(np.isfinite(v), axis=0)
-        d = (np.nanmax(v, axis=0) - np.nanmin(v, axis=0)) / np.abs(np.nanmean(v, axis=0))
+        d = (nan_quiet(np.nanmax, v, axis=0) - nan_quiet(np.nanmin, v, axis=0)) / np.abs(
+            nan_quiet(np.nanmean, v, axis=0)
+        )
     return np.where(n >= 2, d, np.nan)
 
 
@@ -115,8 +126,8 @@ def spreads(curves: list[dict], grid, name: str) -> dict:
     n0 = int(ns.min())
     disc = np.full(len(grid), np.nan)
     if (ns == 2 * n0).any():
-        a = np.nanmean(v[ns == n0], axis=0)
-        b = np.nanmean(v[ns == 2 * n0], axis=0)
+        a = nan_quiet(np.nanmean, v[ns == n0], axis=0)
+        b = nan_quiet(np.nanmean, v[ns == 2 * n0], axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
             disc = np.abs(a - b) / np.abs(b)
     return {"all": _spread(v), "same_n": same, "discretisation": disc, "n_coarse": n0}
@@ -142,7 +153,7 @@ def _log_scatter(curves: dict, n_grid: int = 40) -> float:
 def _fig5_curves(s: Series) -> dict:
     out = {}
     for p, key in enumerate(s.keys):
-        y = np.nanmean(s.obs["r_max"][p], axis=0)
+        y = nan_quiet(np.nanmean, s.obs["r_max"][p], axis=0)
         ok = np.isfinite(y) & (s.lam > 0)
         n = s.positions.shape[3] - 1
         out[(float(key[0]), float(key[1]))] = {

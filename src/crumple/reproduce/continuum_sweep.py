@@ -29,6 +29,7 @@ from ..paper import PaperValue
 from ..theory import gamma_prediction
 from .common import Context, Estimate, Record, _alt, _combine, _row
 from .continuum import PERFECT, SWEEP
+from .continuum_collapse import nan_quiet
 from .series import Series, _local_slopes
 
 NAME = "continuum_sweep"
@@ -141,7 +142,7 @@ def measure(ctx: Context) -> Record:
     power_law = bool(np.isfinite(ratio) and ratio >= MIN_DECADE)
     d = float(s.hard_core)
     r_dense = math.sqrt(1.0 * d / math.pi)
-    mean_r = np.nanmean(rmax, axis=0)
+    mean_r = nan_quiet(np.nanmean, rmax, axis=0)
     x_sl, sl = _local_slopes(lam_c, mean_r)
     nrep = s.replicas
     reps = f"{nrep} disorder replicas"
@@ -269,7 +270,7 @@ def draw(rec: Record) -> dict:
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
     for y in d["r_max"]:
         a.loglog(x, y, "-", color="0.7", lw=1)
-    m = np.nanmean(d["r_max"], axis=0)
+    m = nan_quiet(np.nanmean, d["r_max"], axis=0)
     a.loglog(x, m, "ko-", ms=3, label="disorder, mean")
     a.loglog(x, d["r_max_perfect"], "r.-", ms=3, label="perfect wire")
     ok = np.isfinite(m)
@@ -308,7 +309,7 @@ def draw(rec: Record) -> dict:
     for y in d["gamma"]:
         okg = np.isfinite(y) & (y > 0)
         g.loglog(x[okg], y[okg], "-", color="0.7", lw=1)
-    gm = np.nanmean(d["gamma"], axis=0)
+    gm = nan_quiet(np.nanmean, d["gamma"], axis=0)
     for y, style, lab in ((gm, "ko-", "disorder, mean"), (d["gamma_perfect"], "r.-", "perfect"),
                           (d["gamma_closed"], "b--", "closed form (Eq. 5)")):  # fmt: skip
         okg = np.isfinite(y) & (y > 0)
