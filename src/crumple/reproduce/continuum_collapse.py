@@ -178,7 +178,8 @@ def measure(ctx: Context) -> Record:
         Estimate(spread_rg, disc_rg, len(curves), (float(grid[0]), float(grid[-1]))),
         f"1 × {len(curves)} (k_b, N)",
         f"σ = |R_g(N) − R_g(2N)|/R_g(2N) at N = {rg['n_coarse']}, the coarsest N; spread at "
-        f"equal N {_max(rg['same_n']):.1e} (exact rescaling)",
+        f"equal N {_max(rg['same_n']):.1e} (an exact rescaling of the energy: more than "
+        "~1e-5 means the ramps reached different states)",
         reference=VALUE,
     )
     row["fit_window"] = [float(grid[0]), float(grid[-1])]
@@ -275,8 +276,10 @@ def discuss(rec: Record, records) -> dict[str, str]:
         VALUE.key: (
             "At equal N, (k_b, λ, k_s) → (a k_b, a λ, a k_s) multiplies the discrete energy by "
             "a (except the hard core, whose energy scale is fixed), so those points coincide to "
-            "the solver's tolerance; across N the spread is the discretisation error, which is "
-            f"the tolerance of the collapse (σ = {r['sigma']:.2g} here). The collapse is stated "
-            "only where the spread is within 2σ."
+            "the solver's tolerance unless the ramp snaps into different metastable states; "
+            "across N the spread is the discretisation error, which is the tolerance of the "
+            f"collapse (σ = {r['sigma']:.2g} here), unless the states differ (then the number "
+            "of loops differs between points: collapse figure). The collapse is stated only "
+            "where the spread is within 2σ."
         )
     }
