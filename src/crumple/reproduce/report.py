@@ -67,7 +67,8 @@ def write_report(
     results = _jsonable({**an.to_json(), "versions": meta.get("versions", {})})
     atomic_write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "report.md", to_markdown(doc))
-    atomic_write_text(out / "report.html", to_html(doc, figdir))
+    html = to_html(doc, figdir) if study is None else to_html(doc, figdir, study.title)
+    atomic_write_text(out / "report.html", html)
     return {
         "report": str(out / "report.html"),
         "markdown": str(out / "report.md"),
