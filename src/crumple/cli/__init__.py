@@ -10,20 +10,21 @@
     crumple status    PATH                             done / failed / missing runs of a sweep
     crumple reproduce [--quick] [--out DIR]            the paper's figures and numbers
     crumple figures   DIR                              redraw reproduce's report, no simulation
+    crumple study     continuum [--quick] [--out DIR]  a study beyond the paper (continuum limit)
 
 Every error is one line on stderr and a non-zero exit status, never a traceback.
 
 Modules, by concept: :mod:`.inputs` (reading and validating files, flags, TOML),
 :mod:`.results` (reading a results file), :mod:`.run`, :mod:`.inspect` (energy, measure,
 export), :mod:`.media` (plot, animate), :mod:`.sweep_cmds` (sweep, status, reproduce,
-figures). Each command module has a ``register(subparsers)``.
+figures), :mod:`.study` (study). Each command module has a ``register(subparsers)``.
 """
 
 from __future__ import annotations
 
 import sys
 
-from . import inspect, media, run, sweep_cmds
+from . import inspect, media, run, study, sweep_cmds
 from .inputs import CLIError, Parser, join_negative_values, read_positions
 
 __all__ = ["CLIError", "build_parser", "main", "read_positions"]
@@ -40,7 +41,7 @@ def build_parser() -> Parser:
     )
     parser.add_argument("--version", action="version", version=f"crumple {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (run, inspect, media, sweep_cmds):
+    for module in (run, inspect, media, sweep_cmds, study):
         module.register(sub)
     return parser
 

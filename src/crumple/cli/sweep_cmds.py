@@ -80,12 +80,12 @@ def _cmd_status(args) -> int:
 # --------------------------------------------------------------------------------------------
 
 
-def _finish_report(out, quiet: bool, summary: dict | None = None, display=None) -> int:
+def _finish_report(out, quiet: bool, summary: dict | None = None, display=None, study=None) -> int:
     from ..reproduce import write_report
 
     display = JobProgress(quiet) if display is None else display
     t0 = time.perf_counter()
-    res = write_report(out, log=display.phase)
+    res = write_report(out, log=display.phase, study=study)
     res["report_seconds"] = round(time.perf_counter() - t0, 1)
     if summary is not None:
         res["simulation"] = summary

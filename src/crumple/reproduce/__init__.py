@@ -25,6 +25,9 @@ explains the interface. The conventions of every number are in :mod:`.common`::
     document      the report's structure (blocks)
     render        blocks -> Markdown, HTML (knows no figure)
     report        write_report(), check_report()
+    study         Study: a report of its own sections and profiles (PAPER: this one;
+                  ``crumple study continuum``: continuum, continuum_collapse,
+                  continuum_convergence, continuum_sweep, docs/continuum.md)
 """
 
 from __future__ import annotations

@@ -70,12 +70,16 @@ class Analysis:
         }
 
 
-def _read_profile(out: Path) -> dict:
+def _read_profile(out: Path, study=None) -> dict:
+    """``profile.json`` of ``out``, checked against the profile fields of ``study`` (default:
+    the paper's reproduction, :data:`.study.PAPER`)."""
+    fields = Profile.__dataclass_fields__ if study is None else study.profile_fields
+    command = "crumple reproduce" if study is None else study.command
+    what = "reproduction" if study is None else f"{study.name} study"
     path = out / PROFILE_FILE
     if not path.exists():
         raise ValueError(
-            f"{out} holds no reproduction ({PROFILE_FILE} missing); run `crumple reproduce "
-            f"--out {out}` first"
+            f"{out} holds no {what} ({PROFILE_FILE} missing); run `{command} --out {out}` first"
         )
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
@@ -84,21 +88,25 @@ def _read_profile(out: Path) -> dict:
     prof = meta.get("profile") if isinstance(meta, dict) else None
     lacks = (
         ["profile"] if not isinstance(prof, dict)
-        else [f"profile.{k}" for k in Profile.__dataclass_fields__ if k not in prof]
+        else [f"profile.{k}" for k in fields if k not in prof]
     )  # fmt: skip
     if lacks:
         raise ValueError(
-            f"{path} is damaged (no {', '.join(lacks)}); rerun `crumple reproduce --out {out}` "
+            f"{path} is damaged (no {', '.join(lacks)}); rerun `{command} --out {out}` "
             "with the profile it was made with, which rewrites it"
         )
     return meta
 
 
-def analyse(out, *, sections=None, log: Callable[[str], None] | None = None) -> Analysis:
-    """Measure every section (default: :func:`.registry.sections`) from ``out/data``.
-    ``log(message)`` before each experiment read and each section measured."""
+def analyse(
+    out, *, sections=None, log: Callable[[str], None] | None = None, study=None
+) -> Analysis:
+    """Measure every section (default: :func:`.registry.sections`, or ``study``'s) from
+    ``out/data``. ``log(message)`` before each experiment read and each section measured."""
     out = Path(out)
-    prof = _read_profile(out)["profile"]
+    prof = _read_profile(out, study)["profile"]
+    if sections is None and study is not None:
+        sections = study.sections()
     secs = registry.sections() if sections is None else tuple(sections)
     exps = registry.experiments(secs)
     series = {}

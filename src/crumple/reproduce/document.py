@@ -35,23 +35,26 @@ _ALTERNATIVES = (
 )
 
 
-def _head(an: Analysis, meta: dict) -> list[tuple]:
+_TITLE = "crumple: reproduction of Lin, Lin & Hong, Crumpling wires in two dimensions"
+_ORIGIN = (
+    "Every parameter comes from the paper or is stated as ours in `crumple.paper` (with the "
+    "reason); nothing was tuned to match."
+)
+
+
+def _head(an: Analysis, meta: dict, title: str, origin: str, conventions: str) -> list[tuple]:
     prof = an.profile
-    b: list[tuple] = [
-        ("h1", "crumple: reproduction of Lin, Lin & Hong, Crumpling wires in two dimensions")
-    ]
+    b: list[tuple] = [("h1", title)]
     if prof["name"] != "full":
         b.append(("warn", prof["description"]))
     b.append(
         (
             "p",
             f"Profile **{prof['name']}**: {prof['description']}. crumple "
-            f"{meta['versions'].get('crumple', '?')}. Every parameter comes from the "
-            "paper or is stated as ours in `crumple.paper` (with the reason); nothing "
-            "was tuned to match.",
+            f"{meta['versions'].get('crumple', '?')}. {origin}",
         )
     )
-    b.append(("p", _CONVENTIONS))
+    b.append(("p", conventions))
     return b
 
 
@@ -135,7 +138,7 @@ def _table(an: Analysis) -> list[tuple]:
     ]
 
 
-def _claims_and_alternatives(an: Analysis) -> list[tuple]:
+def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
     claims = [[c["claim"], c["measured"], c["criterion"], c["verdict"]] for c in an.claims]
     alts = [
         [
@@ -152,19 +155,29 @@ def _claims_and_alternatives(an: Analysis) -> list[tuple]:
         ("h2", "The paper's claims"),
         ("table", ["claim", "measured", "criterion", "verdict"], claims),
         ("h2", "Open choices side by side"),
-        ("p", _ALTERNATIVES),
+        ("p", alternatives),
         ("table", ["quantity", "variant", "value", "fit range", "replicas", "paper"], alts),
     ]
 
 
-def blocks(an: Analysis, meta: dict) -> list[tuple]:
-    """The whole report as blocks (:mod:`.render`); ``meta`` is ``profile.json``."""
+def blocks(
+    an: Analysis,
+    meta: dict,
+    *,
+    title: str = _TITLE,
+    origin: str = _ORIGIN,
+    conventions: str = _CONVENTIONS,
+    alternatives: str = _ALTERNATIVES,
+) -> list[tuple]:
+    """The whole report as blocks (:mod:`.render`); ``meta`` is ``profile.json``. The texts
+    default to the paper's reproduction; another study passes its own
+    (:meth:`.study.Study.text`)."""
     figs = [("fig", stem, cap) for stem, cap in registry.figures(an.sections).items()]
     return [
-        *_head(an, meta),
+        *_head(an, meta, title, origin, conventions),
         *_runs(an),
         *_table(an),
-        *_claims_and_alternatives(an),
+        *_claims_and_alternatives(an, alternatives),
         ("h2", "Figures"),
         *figs,
     ]

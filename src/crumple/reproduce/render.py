@@ -47,10 +47,10 @@ def _inline(text: str) -> str:
     return "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts)).replace("`", "")
 
 
-def to_html(blocks, figdir: Path) -> str:
+def to_html(blocks, figdir: Path, title: str = "crumple reproduction") -> str:
     """The blocks as one HTML page, the PNG figures of ``figdir`` embedded (base64)."""
     out = [
-        "<!DOCTYPE html><html><head><meta charset='utf-8'><title>crumple reproduction"
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
         "</title><style>body{font-family:sans-serif;max-width:1100px;margin:auto;"
         "line-height:1.4}table{border-collapse:collapse;font-size:13px}td,th{border:1px "
         "solid #bbb;padding:3px 6px;vertical-align:top}.warn{background:#fff3cd;padding:"

@@ -45,14 +45,17 @@ def _save(figs: dict, figdir: Path, log: Callable[[str], None] | None = None) ->
             tmp.replace(figdir / f"{stem}.{ext}")
 
 
-def write_report(out, *, log: Callable[[str], None] | None = None, sections=None) -> dict:
+def write_report(
+    out, *, log: Callable[[str], None] | None = None, sections=None, study=None
+) -> dict:
     """Analyse the stores in ``out`` and write figures, ``results.json``, ``report.md`` and
     ``report.html``. Returns the paths written and what :func:`check_report` found missing.
-    ``sections``: default :func:`crumple.reproduce.registry.sections`."""
+    ``sections``: default :func:`crumple.reproduce.registry.sections` (or ``study``'s);
+    ``study``: a :class:`.study.Study` other than the paper's (its title and conventions)."""
     out = Path(out)
-    meta = _read_profile(out)
+    meta = _read_profile(out, study)
     t0 = time.perf_counter()
-    an = analyse(out, sections=sections, log=log)
+    an = analyse(out, sections=sections, log=log, study=study)
     if log:
         log(f"measured in {time.perf_counter() - t0:.1f} s")
     figdir = out / "figures"
@@ -60,11 +63,12 @@ def write_report(out, *, log: Callable[[str], None] | None = None, sections=None
     _save(figs, figdir, log)
     if log:
         log("writing report: results.json, report.md, report.html")
-    doc = blocks(an, meta)
+    doc = blocks(an, meta) if study is None else blocks(an, meta, **study.text())
     results = _jsonable({**an.to_json(), "versions": meta.get("versions", {})})
     atomic_write_text(out / "results.json", json.dumps(results, indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "report.md", to_markdown(doc))
-    atomic_write_text(out / "report.html", to_html(doc, figdir))
+    html = to_html(doc, figdir) if study is None else to_html(doc, figdir, study.title)
+    atomic_write_text(out / "report.html", html)
     return {
         "report": str(out / "report.html"),
         "markdown": str(out / "report.md"),

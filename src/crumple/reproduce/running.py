@@ -17,17 +17,18 @@ from .analysis import PROFILE_FILE, _read_profile
 __all__ = ["run"]
 
 
-def _check_profile(out: Path, profile: str) -> paper.Profile:
-    if profile not in paper.PROFILES:
-        raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(paper.PROFILES)}")
+def _check_profile(out: Path, profile: str, study=None):
+    profiles = paper.PROFILES if study is None else study.profiles
+    if profile not in profiles:
+        raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(profiles)}")
     stored = out / PROFILE_FILE
     if stored.exists():
-        old = _read_profile(out)["profile"]["name"]
+        old = _read_profile(out, study)["profile"]["name"]
         if old != profile:
             raise ValueError(
                 f"{out} holds the {old!r} profile; use another --out for the {profile!r} profile"
             )
-    return paper.PROFILES[profile]
+    return profiles[profile]
 
 
 def run(
@@ -38,19 +39,23 @@ def run(
     scheduler: str | None = None,
     progress: Callable[[str, Any], None] | None = None,
     sections=None,
+    study=None,
 ) -> dict:
     """Run (or resume) every experiment of ``profile`` into ``out/data``; return a summary.
 
     The experiments are those the sections read (default: :func:`.registry.sections`). All
     are submitted at once to one Dask cluster (a local one, or ``scheduler``'s), so long
     Powell runs overlap the short ones. Runs already in the stores are not recomputed.
-    ``progress(experiment, Progress)`` is called as runs finish.
+    ``progress(experiment, Progress)`` is called as runs finish. ``study``: a
+    :class:`.study.Study` other than the paper's (its profiles and sections).
     """
     from ..sweep import connect, run_sweep
 
     out = Path(out)
-    prof = _check_profile(out, profile)  # before anything is created
+    prof = _check_profile(out, profile, study)  # before anything is created
     out.mkdir(parents=True, exist_ok=True)
+    if sections is None and study is not None:
+        sections = study.sections()
     secs = registry.sections() if sections is None else tuple(sections)
     sweeps = {e.name: e.build(prof) for e in registry.experiments(secs)}
     atomic_write_text(

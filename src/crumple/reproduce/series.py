@@ -46,12 +46,20 @@ def _load(store: Path):
     return ds, incomplete
 
 
+def _label(v):
+    """A point coordinate: a float, or a string label as stored (a list-valued parameter such
+    as ``lambdas``, whose label is its JSON, when points set their own λ schedule)."""
+    return v if isinstance(v, str) else float(v)
+
+
 def _point_keys(ds, levels) -> list[tuple]:
     if "point" not in ds.dims:
         return [()]
     idx = ds.indexes["point"]
     return (
-        [tuple(float(v) for v in t) for t in idx] if len(levels) > 1 else [(float(v),) for v in idx]
+        [tuple(_label(v) for v in t) for t in idx]
+        if len(levels) > 1
+        else [(_label(v),) for v in idx]
     )
 
 
