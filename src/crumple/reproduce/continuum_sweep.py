@@ -146,82 +146,24 @@ def measure(ctx: Context) -> Record:
     x_sl, sl = _local_slopes(lam_c, mean_r)
     nrep = s.replicas
     reps = f"{nrep} disorder replicas"
-    no_range = (
-        ""
-        if power_law
-        else (
-            f"; NO POWER-LAW RANGE: r_max/ℓ = {ratio:.2g} < {MIN_DECADE:g} (less than a decade "
-            "between ℓ and R)"
-        )
-    )
-    rows = [
-        _row(ALPHA.key, alpha, reps, f"N = {n:g}, k_b = {kb:g}; local exponents from "
-             f"{np.nanmin(sl):.2f} to {np.nanmax(sl):.2f} over the sweep", reference=ALPHA)
-        if sl.size else _row(ALPHA.key, alpha, reps, "", reference=ALPHA),
-        _row(DM.key, dm, reps, f"Λ = {lam_c[j]:.3g}, ℓ = {ell:.3g} L{no_range}", reference=DM),
-        _row(EPS.key, eps, reps, f"N = {n:g}; the closed form's own ε_l → 1/2 as x → 0",
-             reference=EPS),
-    ]  # fmt: skip
-    for r in (rows[0], rows[2]):
-        r["fit_window"] = list(win)
-    alts = [
-        _alt("α (r_max ~ Λ^α)", "disorder replicas", alpha, nrep, -0.25),
-        _alt("α (r_max ~ Λ^α)", "perfect wire", alpha_pf, 1, -0.25),
-        _alt("D_M at Λ_max", "disorder replicas", dm, nrep, 1.33),
-        _alt("D_M at Λ_max", "perfect wire", dm_pf, 1, 1.33),
-        _alt("ε_l (γ ~ Λ^ε_l)", "disorder replicas", eps, nrep, 0.5),
-        _alt("ε_l (γ ~ Λ^ε_l)", "perfect wire", eps_pf, 1, 0.5),
-    ]
+    rows = _rows(alpha, dm, eps, reps=reps, n=n, kb=kb, sl=sl, lam_j=float(lam_c[j]), ell=ell,
+                 ratio=ratio, power_law=power_law, win=win)  # fmt: skip
+    alts = _alternatives(alpha, alpha_pf, dm, dm_pf, eps, eps_pf, nrep)
     conv = s.converged[0]
     ran = np.isfinite(s.max_force[0])
     frac_eq = float((conv & ran).sum() / max(1, ran.sum()))
 
-    def verdict(row):
-        return row["verdict"] + ("" if power_law or row is not rows[1] else "; no power-law range")
-
-    claims = (
-        {
-            "claim": "α = -0.25, independent of k_b and k_s",
-            "source": "Fig. 5 caption; Sec. III.C",
-            "measured": f"α = {alpha.value:.3f} ± {alpha.sigma:.3f} over Λ ∈ [{win[0]:.3g}, "
-            f"{win[1]:.3g}]; r_max/R_dense at Λ_max = {mean_r[j] / r_dense:.3g}",
-            "criterion": "|α + 0.25| ≤ 2σ; dense packing would give α → 0 with r_max → (Ld/π)^1/2",
-            "verdict": verdict(rows[0]),
-        },
-        {
-            "claim": "D_M = 1.33 ('universal')",
-            "source": "Fig. 3 caption",
-            "measured": f"D_M = {dm.value:.3f} ± {dm.sigma:.3f} at Λ = {lam_c[j]:.3g}, R ∈ "
-            f"[ℓ, r_max], r_max/ℓ = {ratio:.3g}",
-            "criterion": f"|D_M − 1.33| ≤ 2σ, over at least a decade (r_max/ℓ ≥ {MIN_DECADE:g})",
-            "verdict": verdict(rows[1]),
-        },
-        {
-            "claim": "cavity-injected wires: D_M = 1.9 ± 0.1 (Donato & Gomes)",
-            "source": "Donato & Gomes, 'Condensation of elastic energy in two-dimensional "
-            "packing of wire' (a different confinement: the comparison itself is the cavity "
-            "issue's)",
-            "measured": f"our trap-confined D_M = {dm.value:.3f} ± {dm.sigma:.3f}",
-            "criterion": "where ours stands: below, within or above 1.9 ± 0.1 (2σ combined)",
-            "verdict": (
-                "not measured"
-                if not np.isfinite(dm.value)
-                else "below"
-                if dm.value + 2 * math.hypot(dm.sigma, 0.1) < 1.9
-                else "above"
-                if dm.value - 2 * math.hypot(dm.sigma, 0.1) > 1.9
-                else "within"
-            )
-            + ("" if power_law else "; no power-law range"),
-        },
-        {
-            "claim": "ε_l = 0.5",
-            "source": "Sec. III.B",
-            "measured": f"ε_l = {eps.value:.3f} ± {eps.sigma:.3f} over Λ ∈ [{win[0]:.3g}, "
-            f"{win[1]:.3g}]; fraction of stages at equilibrium {frac_eq:.3f}",
-            "criterion": "|ε_l − 0.5| ≤ 2σ",
-            "verdict": verdict(rows[2]),
-        },
+    claims = _claims(
+        rows,
+        alpha=alpha,
+        dm=dm,
+        eps=eps,
+        win=win,
+        lam_j=float(lam_c[j]),
+        ratio=ratio,
+        dense=float(mean_r[j] / r_dense),
+        frac_eq=frac_eq,
+        power_law=power_law,
     )
     k_s = _k_s(ctx)
     lam_abs = s.lam
@@ -252,6 +194,93 @@ def measure(ctx: Context) -> Record:
     }
     return Record(
         rows=tuple(rows), alternatives=tuple(alts), claims=claims, extra=extra, detail=detail
+    )
+
+
+def _rows(alpha, dm, eps, *, reps, n, kb, sl, lam_j, ell, ratio, power_law, win) -> list:
+    """The study's three table rows (α, D_M, ε_l), with their notes and fit windows."""
+    no_range = (
+        ""
+        if power_law
+        else (
+            f"; NO POWER-LAW RANGE: r_max/ℓ = {ratio:.2g} < {MIN_DECADE:g} (less than a decade "
+            "between ℓ and R)"
+        )
+    )
+    rows = [
+        _row(ALPHA.key, alpha, reps, f"N = {n:g}, k_b = {kb:g}; local exponents from "
+             f"{np.nanmin(sl):.2f} to {np.nanmax(sl):.2f} over the sweep", reference=ALPHA)
+        if sl.size else _row(ALPHA.key, alpha, reps, "", reference=ALPHA),
+        _row(DM.key, dm, reps, f"Λ = {lam_j:.3g}, ℓ = {ell:.3g} L{no_range}", reference=DM),
+        _row(EPS.key, eps, reps, f"N = {n:g}; the closed form's own ε_l → 1/2 as x → 0",
+             reference=EPS),
+    ]  # fmt: skip
+    for r in (rows[0], rows[2]):
+        r["fit_window"] = list(win)
+    return rows
+
+
+def _alternatives(alpha, alpha_pf, dm, dm_pf, eps, eps_pf, nrep) -> list:
+    """Disorder replicas and the perfect wire side by side, against the paper's values."""
+    return [
+        _alt("α (r_max ~ Λ^α)", "disorder replicas", alpha, nrep, -0.25),
+        _alt("α (r_max ~ Λ^α)", "perfect wire", alpha_pf, 1, -0.25),
+        _alt("D_M at Λ_max", "disorder replicas", dm, nrep, 1.33),
+        _alt("D_M at Λ_max", "perfect wire", dm_pf, 1, 1.33),
+        _alt("ε_l (γ ~ Λ^ε_l)", "disorder replicas", eps, nrep, 0.5),
+        _alt("ε_l (γ ~ Λ^ε_l)", "perfect wire", eps_pf, 1, 0.5),
+    ]
+
+
+def _claims(rows, *, alpha, dm, eps, win, lam_j, ratio, dense, frac_eq, power_law) -> tuple:
+    """The study's claims against the paper and experiment, from its estimates."""
+
+    def verdict(row):
+        return row["verdict"] + ("" if power_law or row is not rows[1] else "; no power-law range")
+
+    return (
+        {
+            "claim": "α = -0.25, independent of k_b and k_s",
+            "source": "Fig. 5 caption; Sec. III.C",
+            "measured": f"α = {alpha.value:.3f} ± {alpha.sigma:.3f} over Λ ∈ [{win[0]:.3g}, "
+            f"{win[1]:.3g}]; r_max/R_dense at Λ_max = {dense:.3g}",
+            "criterion": "|α + 0.25| ≤ 2σ; dense packing would give α → 0 with r_max → (Ld/π)^1/2",
+            "verdict": verdict(rows[0]),
+        },
+        {
+            "claim": "D_M = 1.33 ('universal')",
+            "source": "Fig. 3 caption",
+            "measured": f"D_M = {dm.value:.3f} ± {dm.sigma:.3f} at Λ = {lam_j:.3g}, R ∈ "
+            f"[ℓ, r_max], r_max/ℓ = {ratio:.3g}",
+            "criterion": f"|D_M − 1.33| ≤ 2σ, over at least a decade (r_max/ℓ ≥ {MIN_DECADE:g})",
+            "verdict": verdict(rows[1]),
+        },
+        {
+            "claim": "cavity-injected wires: D_M = 1.9 ± 0.1 (Donato & Gomes)",
+            "source": "Donato & Gomes, 'Condensation of elastic energy in two-dimensional "
+            "packing of wire' (a different confinement: the comparison itself is the cavity "
+            "issue's)",
+            "measured": f"our trap-confined D_M = {dm.value:.3f} ± {dm.sigma:.3f}",
+            "criterion": "where ours stands: below, within or above 1.9 ± 0.1 (2σ combined)",
+            "verdict": (
+                "not measured"
+                if not np.isfinite(dm.value)
+                else "below"
+                if dm.value + 2 * math.hypot(dm.sigma, 0.1) < 1.9
+                else "above"
+                if dm.value - 2 * math.hypot(dm.sigma, 0.1) > 1.9
+                else "within"
+            )
+            + ("" if power_law else "; no power-law range"),
+        },
+        {
+            "claim": "ε_l = 0.5",
+            "source": "Sec. III.B",
+            "measured": f"ε_l = {eps.value:.3f} ± {eps.sigma:.3f} over Λ ∈ [{win[0]:.3g}, "
+            f"{win[1]:.3g}]; fraction of stages at equilibrium {frac_eq:.3f}",
+            "criterion": "|ε_l − 0.5| ≤ 2σ",
+            "verdict": verdict(rows[2]),
+        },
     )
 
 
