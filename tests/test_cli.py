@@ -368,9 +368,10 @@ def test_export_then_energy_round_trip(capsys, tmp_path, ramp_file, fmt):
     code, out, err = run_cli(capsys, "energy", dest, *args)
     assert code == 0, err
     got = json.loads(out)
-    # an imperfect wire's rest angles are not a flag of crumple energy: compare the terms that
-    # do not see them, and the total of a perfect wire below
-    for k in ("stretching", "confinement", "hard_core"):
+    # the wire is imperfect (--rest-angle-sd 0.01): the export writes its rest angles beside
+    # the positions and the printed line passes them, so every term, bending included, agrees
+    assert "--rest-angles" in line and (tmp_path / "w.rest.npy").is_file()
+    for k in ("bending", "stretching", "confinement", "hard_core", "total"):
         assert got[k] == pytest.approx(getattr(stage.energy, k), rel=1e-12, abs=1e-300), k
 
 
@@ -438,3 +439,34 @@ def test_run_with_worker_processes_matches_the_library(capsys, tmp_path):
     for g, w in zip(got, want, strict=True):
         for sg, sw in zip(g.stages, w.stages, strict=True):
             np.testing.assert_array_equal(sg.positions, sw.positions)
+
+
+class _ClosedPipe:
+    """A stderr whose reader has gone (``2>&1 | head -n 1``)."""
+
+    def isatty(self):
+        return False
+
+    def write(self, text):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def flush(self):
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_progress_goes_quiet_on_a_closed_pipe(monkeypatch):
+    from types import SimpleNamespace
+
+    from crumple.cli.progress import JobProgress
+    from crumple.cli.run import Progress
+
+    job = JobProgress(stream=_ClosedPipe(), every=0.0, grace=0.0)
+    p = SimpleNamespace(total=2, done=2, failed=0, running=0, skipped=0)
+    job.sweep(p)  # must not raise
+    job.phase("drawing figures")
+    job.close()
+    assert job.quiet
+    monkeypatch.setattr("sys.stderr", _ClosedPipe())
+    prog = Progress(quiet=False, n_replicas=1, n_stages=2, every=0.0)
+    prog.stage(0, 0, 10.0, True)  # must not raise
+    assert prog.quiet

@@ -143,35 +143,41 @@ class JobProgress:
         finished = all(p.done + p.failed == p.total for p in self.parts.values())
         if not finished and now - self.last < (0.5 if self.tty else self.every):
             return
-        # in a log, the first line waits until every experiment has reported once (each
-        # reports as soon as it has checked its store), so that its totals are the job's
+        # in a log, the first line waits a fixed min(grace, every) seconds: long enough, in
+        # practice, for every experiment to report once (each reports as soon as it has
+        # checked its store), so that the first line's totals are usually the job's; it does
+        # not wait for the reports themselves (an experiment slow to start shows up later)
         if not finished and not self.tty and now - self.t0 < min(self.grace, self.every):
             return
         self.last = now
         line = progress_line(self.name, self.parts, elapsed=now - self.t0, bar=20 * self.tty)
         if self.tty:
-            self.stream.write(f"\r{line}\x1b[K")
-            self.open = True
+            self._emit(f"\r{line}\x1b[K")
+            self.open = not self.quiet
         else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
+            self._emit(line + "\n")
+
+    def _emit(self, text: str) -> None:
+        """Write and flush; if the stream is gone (a closed pipe: ``2>&1 | head``), go quiet
+        instead of failing the job: the display is a courtesy, the results are the point."""
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except OSError:
+            self.quiet, self.open = True, False
 
     def close(self) -> None:
         """End a rewritten line (on a terminal) so that what follows starts on its own."""
         with self.lock:
-            if self.open:
-                self.stream.write("\n")
-                self.stream.flush()
-                self.open = False
+            if self.open and not self.quiet:
+                self._emit("\n")
+            self.open = False
 
     def phase(self, message: str) -> None:
         """A line such as ``drawing figures: fig4_gamma (3/9)``, after the progress line."""
         if self.quiet:
             return
         with self.lock:
-            if self.open:
-                self.stream.write("\n")
-                self.open = False
             elapsed = duration(time.monotonic() - self.t0)
-            self.stream.write(f"crumple: {message} ({elapsed} elapsed)\n")
-            self.stream.flush()
+            self._emit(("\n" if self.open else "") + f"crumple: {message} ({elapsed} elapsed)\n")
+            self.open = False

@@ -215,12 +215,15 @@ class Progress:
     def _write(self, line: str, force: bool = False) -> None:
         if self.quiet:
             return
-        if self.tty:
-            sys.stderr.write(f"\r{line}   ")
-        elif force or time.monotonic() - self.last >= self.every:
-            self.last = time.monotonic()
-            sys.stderr.write(line + "\n")
-        sys.stderr.flush()
+        try:
+            if self.tty:
+                sys.stderr.write(f"\r{line}   ")
+            elif force or time.monotonic() - self.last >= self.every:
+                self.last = time.monotonic()
+                sys.stderr.write(line + "\n")
+            sys.stderr.flush()
+        except OSError:  # stderr closed (e.g. `2>&1 | head`): go quiet, keep computing
+            self.quiet = True
 
     def stage(self, r: int, i: int, lam: float, converged: bool) -> None:
         self.stages_done[r] = i + 1
