@@ -470,3 +470,10 @@ def test_progress_goes_quiet_on_a_closed_pipe(monkeypatch):
     prog = Progress(quiet=False, n_replicas=1, n_stages=2, every=0.0)
     prog.stage(0, 0, 10.0, True)  # must not raise
     assert prog.quiet
+
+
+@pytest.mark.parametrize("dpi", [0, -3])
+def test_animate_refuses_a_dpi_below_one(capsys, tmp_path, ramp_file, dpi):
+    code, out, err = run_cli(capsys, "animate", ramp_file, "-o", tmp_path / "a.gif", "--dpi", dpi)
+    assert "--dpi must be >= 1" in one_line_error(code, out, err)
+    assert not list(tmp_path.iterdir())  # nothing left behind

@@ -129,3 +129,19 @@ def test_a_store_written_before_the_observables_gets_them_computed_on_load(store
     assert got.attrs["observables_computed_on_load"] == 2
     for k in (*so.OBSERVABLES, "gamma"):
         np.testing.assert_array_equal(got[k], want[k])
+
+
+def test_one_contact_distance_everywhere():
+    """crumple measure, measure() and the stored contacts count at one distance, 2 d."""
+    import inspect as pyinspect
+
+    import crumple.cli.media
+    import crumple.cli.run
+    from crumple.model import Wire
+    from crumple.observables import measure
+    from crumple.stage_observables import CONTACT_DISTANCE, CONTACT_FACTOR
+
+    assert CONTACT_DISTANCE == CONTACT_FACTOR * Wire(k_b=1, k_s=1, n_segments=3).hard_core
+    assert pyinspect.signature(measure).parameters["contact_distance"].default == CONTACT_DISTANCE
+    for mod in (crumple.cli.media, crumple.cli.run):  # no copies of the factor
+        assert "CONTACT_FACTOR" not in vars(mod)

@@ -649,7 +649,7 @@ def measure(
     radii=None,
     rg: str = "r_max",
     fit_range=(0.5, 1.0),
-    contact_distance: float = 1e-5,
+    contact_distance: float = 2e-5,
     loop_distance: float | None = None,
 ) -> dict:
     """All observables of one wire as a JSON-able dict (what ``crumple measure`` prints).
@@ -659,8 +659,9 @@ def measure(
     * ``center``: ``[x, y]`` used for every radius (the centre of mass unless given);
     * ``r_max``: :func:`r_max` (the paper's R_G);
     * ``radius_of_gyration``: RMS radius, :func:`radius_of_gyration`;
-    * ``contacts``: :func:`count_contacts` at ``contact_distance`` (default ``1e-5``, the
-      hard-core width of Table I);
+    * ``contacts``: :func:`count_contacts` at ``contact_distance`` (default ``2e-5``: twice
+      the hard-core width of Table I, the distance of the contacts a sweep stores,
+      ``crumple.stage_observables.CONTACT_DISTANCE``);
     * ``crossings``: number of intersecting segment pairs,
       ``len(crumple.geometry.find_crossings(positions))`` (0 for a physical wire);
     * ``mass_size_exponent``: ``{"value", "stderr", "fit_range", "n_points", "rg"}`` from
@@ -668,7 +669,7 @@ def measure(
     * ``mass_within``: list of ``[R, M(R)]`` (Eq. 3, exact lengths) at ``radii``, or by default
       at 25 radii log-spaced from ``r_max / 100`` to ``r_max``;
     * ``loops``: :meth:`LoopStats.to_dict` of :func:`loops` at ``loop_distance`` (default
-      ``2 * contact_distance``, i.e. twice the hard-core width): ``count``,
+      ``contact_distance``, i.e. twice the hard-core width): ``count``,
       ``counts_by_depth``, ``area`` (the distribution's count, total, mean, min, quartiles,
       max), ``contact_distance``, ``min_width``; ``None`` for a wire that crosses itself.
 
@@ -687,7 +688,7 @@ def measure(
     contact_distance : float
         ``[length]``, > 0.
     loop_distance : float, optional
-        Contact distance of :func:`loops` ``[length]``, > 0. Default ``2 * contact_distance``.
+        Contact distance of :func:`loops` ``[length]``, > 0. Default ``contact_distance``.
 
     Returns
     -------
@@ -731,7 +732,7 @@ def measure(
         raise ValueError(f"contact_distance must be a number, got {contact_distance!r}") from err
     if not (math.isfinite(dist) and dist > 0):
         raise ValueError(f"contact_distance must be positive, got {contact_distance!r}")
-    loop_dist = 2.0 * dist if loop_distance is None else loop_distance
+    loop_dist = dist if loop_distance is None else loop_distance
     try:
         loop_dist = float(loop_dist)
     except (TypeError, ValueError) as err:

@@ -31,6 +31,7 @@ from .model import Wire
 from .observables import r_max, radius_of_gyration
 
 __all__ = [
+    "CONTACT_DISTANCE",
     "CONTACT_FACTOR",
     "END_FRACTION",
     "OBSERVABLES",
@@ -44,6 +45,10 @@ __all__ = [
 #: A contact: two non-adjacent segments closer than this many hard-core widths ``d``. Also
 #: the contact distance of the loops, ``c = 2 d`` (``docs/observables.md``).
 CONTACT_FACTOR = 2.0
+#: The contact distance of a wire with Table I's hard core (``d = 1e-5``): ``2e-5``
+#: ``[length]``. ``crumple measure`` and :func:`crumple.observables.measure` count contacts
+#: and loops at this distance by default, so that they agree with the stored ``contacts``.
+CONTACT_DISTANCE = CONTACT_FACTOR * Wire.__dataclass_fields__["hard_core"].default
 #: "Interior" contacts: both segments at least this fraction of the wire from either end.
 END_FRACTION = 0.1
 #: A wire whose joints all turn by less than this ``[rad]`` is straight: its bending energy

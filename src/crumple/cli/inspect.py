@@ -101,13 +101,10 @@ def read_rest_angles(path, n_nodes: int) -> np.ndarray:
 # crumple measure
 # --------------------------------------------------------------------------------------------
 
-#: ``crumple measure``'s default contact distance [length]: the hard-core width of Table I.
-CONTACT_DISTANCE = 1e-5
-
-
 def cmd_measure(args) -> int:
     from ..geometry import segment_lengths
     from ..observables import measure
+    from ..stage_observables import CONTACT_DISTANCE
 
     x = read_positions(args.file)
     dist = CONTACT_DISTANCE if args.contact_distance is None else args.contact_distance
@@ -271,13 +268,13 @@ def register(sub) -> None:
     p.add_argument(
         "--contact-distance",
         type=float,
-        help=f"contact distance [length] (default {CONTACT_DISTANCE:g}, the hard-core width of "
-        "Table I; warns when it is not below the shortest segment)",
+        help="contact distance [length] (default 2e-5 = 2 × the hard-core width of Table I, "
+        "as the contacts a sweep stores; warns when it is not below the shortest segment)",
     )
     p.add_argument(
         "--loop-distance",
         type=float,
-        help="the loops' contact distance [length] (default 2 × the contact distance; "
+        help="the loops' contact distance [length] (default: the contact distance; "
         "docs/observables.md)",
     )
     p.set_defaults(func=cmd_measure)

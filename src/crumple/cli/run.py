@@ -35,9 +35,6 @@ __all__ = ["POWELL_MAXITER", "cmd_run", "register"]
 #: full reproduction's setting; ~4 s per stage at N = 100). ``Ramp.maxiter``'s default (5000)
 #: counts Newton iterations and would let Powell run for hours.
 POWELL_MAXITER = 20
-#: Contacts drawn on the figure: segments closer than this many hard-core widths (as in the
-#: reproduction report).
-CONTACT_FACTOR = 2.0
 
 _WIRE_KEYS = {
     "kb": "k_b",
@@ -343,6 +340,7 @@ def draw(results, wire, lambdas, *, replica: int = 0):
     """The Fig. 2-style figure of one replica at ``lambdas`` (those it reached)."""
     from ..figures import plot_configurations
     from ..geometry import close_segment_pairs
+    from ..stage_observables import CONTACT_FACTOR
 
     first = results[0]
     shown = [lam for lam in lambdas if any(s.lam == lam for s in first.stages)]
@@ -369,22 +367,19 @@ def draw(results, wire, lambdas, *, replica: int = 0):
 def publish(out: Path, results, *, seed, fig, attrs=None) -> tuple[Path, Path]:
     """Write ``ramps.h5`` and ``configurations.png`` so that they always match (module
     docstring)."""
-    from ..storage import save_ramps
+    from ..storage import atomic_path, save_ramps
 
     h5, png = out / "ramps.h5", out / "configurations.png"
-    tag = f"{os.getpid()}.tmp"
-    tmp_png, tmp_h5 = out / f".configurations.{tag}.png", out / f".ramps.{tag}.h5"
-    try:
+    # atomic_path renames on leaving its block, the inner block first: so the order is
+    # 1. the old figure goes (no moment shows it beside new results), 2. the new results are
+    # renamed into place, 3. then their figure; a failure anywhere deletes the temporaries
+    with atomic_path(png, suffix=".png") as tmp_png:
         fig.savefig(tmp_png, dpi=130)
-        _fsync(tmp_png)
-        save_ramps(tmp_h5, results, seed=seed, attrs=attrs)  # flushed to disk by save_ramps
-        png.unlink(missing_ok=True)  # 1. the old figure: no moment shows it beside new results
-        os.replace(tmp_h5, h5)  # 2. the new results
-        os.replace(tmp_png, png)  # 3. their figure
-        _fsync(out)
-    finally:
-        tmp_png.unlink(missing_ok=True)
-        tmp_h5.unlink(missing_ok=True)
+        with atomic_path(h5, suffix=".h5") as tmp_h5:
+            save_ramps(tmp_h5, results, seed=seed, attrs=attrs)
+            png.unlink(missing_ok=True)  # 1.
+        # 2. done on leaving the inner block; 3. on leaving this one
+    _fsync(out)
     return h5, png
 
 
