@@ -634,8 +634,9 @@ def plot_loop_count(lam, n_loops, *, brackets=None, picture=None) -> Figure:
         ``positions`` (n, 2), ``boundaries`` (loop polygons), ``depth``, ``centroid``,
         ``links`` (n_links, 2, 2), ``lam``: panel (b), each loop filled in its own colour
         (hatched when nested, depth >= 1) and numbered 1…n (largest first), every contact link
-        marked by a red dot (the links are far shorter than the line width); without it, (b)
-        is hidden.
+        marked by a red dot (the links are far shorter than the line width); with
+        ``undefined: True`` (and only ``positions``, ``lam``), the wire titled "loops
+        undefined"; without it, (b) is hidden.
 
     Examples
     --------
@@ -677,6 +678,13 @@ def plot_loop_count(lam, n_loops, *, brackets=None, picture=None) -> Figure:
         b.set_visible(False)
         return fig
     x = np.asarray(picture["positions"])
+    if picture.get("undefined"):
+        b.plot(x[:, 0], x[:, 1], "-", color="0.1", lw=1)
+        b.set_aspect("equal", adjustable="datalim")
+        b.set_title(f"λ = {picture['lam']:g}: loops undefined (the wire crosses itself, or "
+                    "its contact graph is not plane)", fontsize=9)  # fmt: skip
+        _panel_letter(b, 1)
+        return fig
     depth = np.asarray(picture["depth"])
     cycle = [f"C{k}" for k in range(10)]
     for k, (poly, d) in enumerate(zip(picture["boundaries"], depth, strict=True)):
