@@ -66,7 +66,7 @@ def load(path, *, positions: bool = False):
     import xarray as xr
 
     out = Path(path)
-    m = _read_manifest(out)
+    m = _read_manifest(out, for_load=True)
     lam = np.asarray(m["lambdas"], dtype=float)
     coords: dict[str, Any] = {}
     shape: list[int] = []
