@@ -302,10 +302,11 @@ def test_run_outputs_never_mismatch_after_a_kill(capsys, tmp_path, monkeypatch, 
 
 def test_powell_has_its_own_budget_and_shows_stages(capsys, tmp_path):
     from crumple.cli import build_parser
-    from crumple.cli.run import POWELL_MAXITER, build_run
+    from crumple.cli.run import build_run
+    from crumple.protocol import DEFAULT_MAXITER
 
     args = build_parser().parse_args(["run", "--method", "powell"])
-    assert build_run(args)[1].maxiter == POWELL_MAXITER
+    assert build_run(args)[1].maxiter == DEFAULT_MAXITER["powell"] == 20
     args = build_parser().parse_args(["run", "--method", "powell", "--maxiter", "3"])
     assert build_run(args)[1].maxiter == 3
     assert build_run(build_parser().parse_args(["run"]))[1].maxiter == 5000  # Newton's

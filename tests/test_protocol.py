@@ -450,3 +450,17 @@ def test_imperfect_wires_give_genuinely_different_replicas():
 def test_perfect_wire_draws_no_rest_angles():
     r = run_ramp(Wire(k_b=5, k_s=5e5, n_segments=20), Ramp(lambdas=(1, 10)), seed=0)
     assert r.rest_angles is None
+
+
+def test_maxiter_default_depends_on_the_method():
+    """Powell's budget is Ramp's, not the CLI's: a sweep or a script gets it too; Newton's
+    resolved default, and so every stored Newton run id, is unchanged."""
+    from crumple.protocol import Ramp
+    from crumple.sweep import Sweep
+
+    assert Ramp().maxiter == 5000 and Ramp().to_dict()["maxiter"] == 5000
+    assert Ramp(method="powell").maxiter == 20
+    assert Ramp(method="powell", maxiter=3).maxiter == 3
+    sweep = Sweep(wire={"n_segments": 8}, ramp={"lambdas": [1, 2], "method": "powell"})
+    assert next(iter(sweep.runs())).ramp.maxiter == 20
+    assert Ramp.from_dict(Ramp().to_dict()) == Ramp()

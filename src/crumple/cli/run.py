@@ -29,12 +29,7 @@ import numpy as np
 
 from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
 
-__all__ = ["POWELL_MAXITER", "cmd_run", "register"]
-
-#: Powell's default budget per stage in ``crumple run``, in sweeps over all directions (the
-#: full reproduction's setting; ~4 s per stage at N = 100). ``Ramp.maxiter``'s default (5000)
-#: counts Newton iterations and would let Powell run for hours.
-POWELL_MAXITER = 20
+__all__ = ["cmd_run", "register"]
 
 _WIRE_KEYS = {
     "kb": "k_b",
@@ -103,8 +98,6 @@ def build_run(args):
         v = getattr(args, key)
         if v is not None:
             r[key] = v
-    if r.get("method") == "powell" and "maxiter" not in r:
-        r["maxiter"] = POWELL_MAXITER
     if args.lambdas is not None:
         r["lambdas"] = floats(args.lambdas, "--lambdas")
     elif "lambdas" not in r:
@@ -485,7 +478,7 @@ _FLAGS = [
      "geometric 1 … 2000 plus 70, 200, 300, 1000)"),
     ("--ftol", float, "equilibrium: largest node force [energy/length] (default 1e-6)"),
     ("--maxiter", int, "budget per stage: Newton iterations (default 5000) or Powell sweeps "
-     f"(default {POWELL_MAXITER})"),
+     "(default 20): Ramp's default for the method"),
     ("--max-step", float, "largest Newton node step [segment lengths] (default 0.5)"),
     ("--initial-noise", float,
      "transverse noise of the initial wire [segment lengths] (default 0.01)"),
