@@ -478,3 +478,70 @@ def test_animate_refuses_a_dpi_below_one(capsys, tmp_path, ramp_file, dpi):
     code, out, err = run_cli(capsys, "animate", ramp_file, "-o", tmp_path / "a.gif", "--dpi", dpi)
     assert "--dpi must be >= 1" in one_line_error(code, out, err)
     assert not list(tmp_path.iterdir())  # nothing left behind
+
+
+def _stop_after_replica_0(monkeypatch, exc=KeyboardInterrupt):
+    """run_all that finishes replica 0, then is stopped as by Ctrl-C."""
+    import crumple.cli.run as clirun
+
+    real = clirun.run_all
+
+    def run_all(wire, ramp, n_rep, seed, workers, prog, done):
+        real(wire, ramp, 1, seed, workers, prog, done)
+        raise exc
+
+    monkeypatch.setattr(clirun, "run_all", run_all)
+
+
+def test_a_signal_while_publishing_keeps_every_replica(capsys, tmp_path, monkeypatch):
+    import signal
+
+    import crumple.cli.run as clirun
+
+    real, seen = clirun.publish, []
+
+    def publish(out, results, **kw):
+        seen.append(signal.getsignal(signal.SIGTERM))
+        if not kw.get("tag"):
+            raise KeyboardInterrupt  # Ctrl-C while the complete run is being written
+        return real(out, results, **kw)
+
+    monkeypatch.setattr(clirun, "publish", publish)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)
+    assert code == 130 and "kept the 2 finished replica(s) of 2" in err, err
+    assert seen[0] is clirun._on_sigterm  # the handler was still in place
+    with h5py.File(tmp_path / "ramps.interrupted.h5") as f:
+        assert f["positions"].shape[0] == 2
+
+
+def test_an_interrupted_overwrite_keeps_the_complete_old_results(capsys, tmp_path, monkeypatch):
+    assert run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)[0] == 0
+    old = (tmp_path / "ramps.h5").read_bytes()
+    _stop_after_replica_0(monkeypatch)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, "--kb", 8,
+                           "--overwrite", *RUN_SMALL)  # fmt: skip
+    assert code == 130 and "kept the 1 finished replica(s) of 2" in err, err
+    assert (tmp_path / "ramps.h5").read_bytes() == old
+    with h5py.File(tmp_path / "ramps.interrupted.h5") as f:
+        assert f["positions"].shape[0] == 1 and json.loads(f.attrs["wire"])["k_b"] == 8
+
+
+def test_a_second_signal_while_saving_is_ignored(capsys, tmp_path, monkeypatch):
+    import os
+    import signal
+
+    import crumple.cli.run as clirun
+
+    real = clirun.publish
+
+    def publish(out, results, **kw):
+        os.kill(os.getpid(), signal.SIGTERM)  # the impatient second kill
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(out, results, **kw)
+
+    _stop_after_replica_0(monkeypatch)
+    monkeypatch.setattr(clirun, "publish", publish)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)
+    assert code == 130 and "kept the 1 finished replica(s)" in err, err
+    assert (tmp_path / "ramps.interrupted.h5").is_file()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -10,8 +10,13 @@ What it guarantees:
   at any point leaves the old pair, the old results without a figure, the new results without
   a figure, or the new pair, never results beside another run's figure (``crumple plot``
   redraws a missing figure);
-* Ctrl-C or SIGTERM stops every worker process within seconds and says what was kept (the
-  replicas that had finished are written, marked ``interrupted``).
+* Ctrl-C or SIGTERM stops every worker process within seconds and says what was kept: the
+  replicas that had finished are written to ``OUT/ramps.interrupted.h5`` (and
+  ``configurations.interrupted.png``), marked ``interrupted``, never to ``ramps.h5``, so that
+  ``ramps.h5`` is always a complete run and ``--overwrite`` never replaces a complete old one
+  with a partial set. The handler stays in place until the outputs are published (a signal
+  while publishing keeps every replica), and further signals are ignored while the finished
+  replicas are being saved.
 """
 
 from __future__ import annotations
@@ -357,12 +362,12 @@ def draw(results, wire, lambdas, *, replica: int = 0):
     )
 
 
-def publish(out: Path, results, *, seed, fig, attrs=None) -> tuple[Path, Path]:
-    """Write ``ramps.h5`` and ``configurations.png`` so that they always match (module
-    docstring)."""
+def publish(out: Path, results, *, seed, fig, attrs=None, tag: str = "") -> tuple[Path, Path]:
+    """Write ``ramps<tag>.h5`` and ``configurations<tag>.png`` so that they always match
+    (module docstring); ``tag=".interrupted"`` for the replicas kept after a signal."""
     from ..storage import atomic_path, save_ramps
 
-    h5, png = out / "ramps.h5", out / "configurations.png"
+    h5, png = out / f"ramps{tag}.h5", out / f"configurations{tag}.png"
     # atomic_path renames on leaving its block, the inner block first: so the order is
     # 1. the old figure goes (no moment shows it beside new results), 2. the new results are
     # renamed into place, 3. then their figure; a failure anywhere deletes the temporaries
@@ -416,17 +421,17 @@ def cmd_run(args) -> int:
     main_thread = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
     t0 = time.perf_counter()
-    try:
+    try:  # the handler stays through publishing: a signal there still keeps every replica
         run_all(wire, ramp, n_rep, seed, workers, prog, done)
+        elapsed = time.perf_counter() - t0
+        results = [done[r] for r in range(n_rep)]
+        fig = draw(results, wire, run["figure_lambdas"])
+        h5, png = publish(out, results, seed=seed, fig=fig)
     except (KeyboardInterrupt, Terminated) as exc:
         return _interrupted(exc, out, done, n_rep, wire, seed, run)
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, old)
-    elapsed = time.perf_counter() - t0
-    results = [done[r] for r in range(n_rep)]
-    fig = draw(results, wire, run["figure_lambdas"])
-    h5, png = publish(out, results, seed=seed, fig=fig)
     failed = [(r, lam, msg) for r, res in enumerate(results) for lam, msg in res.failed_stages]
     summary = {
         "results": str(h5),
@@ -445,7 +450,22 @@ def cmd_run(args) -> int:
 
 
 def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int:
-    """After Ctrl-C or SIGTERM: the workers are stopped; keep the finished replicas."""
+    """After Ctrl-C or SIGTERM: the workers are stopped; keep the finished replicas in
+    ``ramps.interrupted.h5`` (never over a complete ``ramps.h5``), ignoring further signals
+    while they are saved (a second Ctrl-C must not cost them, nor print a traceback)."""
+    main_thread = threading.current_thread() is threading.main_thread()
+    saved = {}
+    if main_thread:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            saved[sig] = signal.signal(sig, signal.SIG_IGN)
+    try:
+        return _keep_finished(exc, out, done, n_rep, wire, seed, run)
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+
+def _keep_finished(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int:
     what = "terminated" if isinstance(exc, Terminated) else "interrupted"
     code = 143 if isinstance(exc, Terminated) else 130
     sys.stderr.write("\n" if sys.stderr.isatty() else "")
@@ -459,11 +479,12 @@ def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int
     kept = sorted(done)
     results = [done[r] for r in kept]
     fig = draw(results, wire, run["figure_lambdas"], replica=kept[0])
-    h5, _ = publish(out, results, seed=seed, fig=fig,
+    h5, _ = publish(out, results, seed=seed, fig=fig, tag=".interrupted",
                     attrs={"interrupted": True, "replica_ids": kept})  # fmt: skip
     print(
         f"crumple: {what}: kept the {len(kept)} finished replica(s) of {n_rep} "
-        f"(replica ids {kept}) in {h5}, marked 'interrupted'; rerun with --overwrite for all",
+        f"(replica ids {kept}) in {h5}, marked 'interrupted' ({out / 'ramps.h5'} is "
+        "untouched); rerun for all",
         file=sys.stderr,
     )
     return code
