@@ -27,7 +27,7 @@ import numpy as np
 
 from crumple.fit import MeanEstimate, PowerLawFit, fit_power_law, mean_confidence_interval
 from crumple.geometry import close_segment_pairs, find_crossings
-from crumple.loops import LoopStats, loops
+from crumple.loops import LoopStats, loops, positive_length
 
 __all__ = [
     "LoopStats",
@@ -271,12 +271,7 @@ def count_contacts(positions, distance: float) -> int:
     (1, 0)
     """
     pos = _positions(positions)
-    try:
-        dist = float(distance)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"distance must be a positive number, got {distance!r}") from err
-    if not (math.isfinite(dist) and dist > 0):
-        raise ValueError(f"distance must be a positive contact distance, got {distance!r}")
+    dist = positive_length("distance", distance)
     pairs, _ = close_segment_pairs(pos, dist)
     return int(pairs.shape[0])
 
@@ -726,19 +721,8 @@ def measure(
             raise ValueError(f"radii must be a non-empty list of numbers, got {radii!r}")
         if not np.all(np.isfinite(table_r)) or np.any(table_r < 0):
             raise ValueError(f"radii must be finite and >= 0, got {radii!r}")
-    try:
-        dist = float(contact_distance)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"contact_distance must be a number, got {contact_distance!r}") from err
-    if not (math.isfinite(dist) and dist > 0):
-        raise ValueError(f"contact_distance must be positive, got {contact_distance!r}")
-    loop_dist = dist if loop_distance is None else loop_distance
-    try:
-        loop_dist = float(loop_dist)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"loop_distance must be a number, got {loop_distance!r}") from err
-    if not (math.isfinite(loop_dist) and loop_dist > 0):
-        raise ValueError(f"loop_distance must be positive, got {loop_distance!r}")
+    dist = positive_length("contact_distance", contact_distance)
+    loop_dist = dist if loop_distance is None else positive_length("loop_distance", loop_distance)
     fit = mass_size_exponent(pos, rg=rg, fit_range=(lo, hi), center=c)
     m = mass_within(pos, table_r, center=c)
     crossings = int(find_crossings(pos).shape[0])
