@@ -16,6 +16,8 @@ import time
 from collections.abc import Mapping
 from typing import Any, TextIO
 
+from ..sweep.execute import eta_seconds
+
 __all__ = ["JobProgress", "duration", "progress_line"]
 
 
@@ -76,12 +78,12 @@ def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: 
     work = st - st_skip
     if st_total:
         frac = st / st_total
-        eta = elapsed / work * (st_total - st) if work > 0 else None
+        eta = eta_seconds(elapsed, work, st_total - st)
         count = f"{done}/{total} ramps, {st}/{st_total} stages ({math.floor(100 * frac)}%)"
     else:  # reports without stage counts: runs only
         frac = (done + failed) / max(total, 1)
         fresh = done + failed - sum(p.skipped for p in ps)
-        eta = elapsed / fresh * (total - done - failed) if fresh > 0 else None
+        eta = eta_seconds(elapsed, fresh, total - done - failed)
         count = f"{done}/{total} ramps"
     if done + failed == total:
         eta = 0.0
