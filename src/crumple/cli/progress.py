@@ -40,6 +40,11 @@ def duration(seconds: float | None) -> str:
 def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: int = 0) -> str:
     """The state of a job in one line.
 
+    The ETA is the time the remaining stages take at the rate of the stages done in this
+    session (stages of runs found already done do not count towards the rate); ``?`` until a
+    stage is done. Stages of runs in flight count as their workers report them, so the ETA
+    and the count move during a long first ramp.
+
     Parameters
     ----------
     phase : str
@@ -52,11 +57,8 @@ def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: 
     bar : int
         Width of a ``[###...]`` bar (0: none, for logs).
 
-    The ETA is the time the remaining stages take at the rate of the stages done in this
-    session (stages of runs found already done do not count towards the rate); ``?`` until a
-    stage is done. Stages of runs in flight count as their workers report them, so the ETA
-    and the count move during a long first ramp.
-
+    Examples
+    --------
     >>> from types import SimpleNamespace as P
     >>> a = P(total=32, done=14, failed=0, running=2, skipped=0, stages=300,
     ...       stages_total=640, stages_skipped=0)

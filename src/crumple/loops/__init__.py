@@ -30,7 +30,9 @@ touch, the hairline gap between the nodes of two pressed strands (hence the defa
 the loops. A run of contacts therefore acts as one contact, the loops on either side of it
 being closed at its ends.
 
-Cost: O(N log N) (spatial hashes, one sort of the half-edges); N = 10^5 in 0.2-0.4 s.
+Cost: O(N log N) for segments of similar length (spatial hashes, one sort of the
+half-edges); N = 10^5 in 0.2-0.4 s. Quadratic when segment lengths differ by orders of
+magnitude (a spiral sampled at a fixed angle: ``docs/performance.md``).
 
 Modules, by concept: :mod:`~crumple.loops.record` (the :class:`LoopStats` record and its
 defaults), :mod:`~crumple.loops.links` (the contact links and their planarity),
