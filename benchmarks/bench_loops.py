@@ -123,8 +123,12 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--shapely", action="store_true", help="compare with shapely.polygonize")
-    ap.add_argument("--fan", default="", help="comma-separated N of the review's fixed-angle "
-                    "spiral (40 segments a turn), e.g. 4000,16000,64000; alone, skips the rest")  # fmt: skip
+    ap.add_argument(
+        "--fan",
+        default="",
+        help="comma-separated N of the review's fixed-angle spiral (40 segments a turn), "
+        "e.g. 4000,16000,64000; alone, skips the rest",
+    )
     args = ap.parse_args(argv)
     if args.fan:
         time_fan([int(v) for v in args.fan.split(",")])

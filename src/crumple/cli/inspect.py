@@ -101,6 +101,7 @@ def read_rest_angles(path, n_nodes: int) -> np.ndarray:
 # crumple measure
 # --------------------------------------------------------------------------------------------
 
+
 def cmd_measure(args) -> int:
     from ..geometry import segment_lengths
     from ..observables import measure

@@ -13,6 +13,7 @@ from .results import read_results, replica_index, stage_index
 
 __all__ = ["cmd_animate", "cmd_plot", "register"]
 
+
 def _title(attrs: dict, r: int) -> str:
     w = attrs["wire"]
     plast = w.get("plasticity")
