@@ -25,9 +25,12 @@ _PAPER_STYLE = {"color": "tab:red", "ls": ":", "lw": 1.2}
 
 
 def _guides(ax, curves, x_range, slopes) -> None:
-    """Straight lines of the given log-log ``slopes`` over ``x_range``, all through one anchor:
-    the geometric mean of the curves' points inside the range (where the eye compares
-    slopes). ``slopes = [(label, exponent, style dict)]``."""
+    """Straight lines of the given log-log ``slopes`` over ``x_range``.
+
+    ``slopes = [(label, exponent, style dict[, ln prefactor])]``: with a ln prefactor (a fit's
+    intercept, from the section's record) the line is that fit, ``exp(ln_a) x^exponent``;
+    without (the paper's exponent, which has no intercept) it goes through the geometric mean
+    of the curves' points inside the range (where the eye compares slopes)."""
     xs, ys = [], []
     for x, y in curves.values():
         x, y = np.asarray(x, float), np.asarray(y, float)
@@ -40,8 +43,12 @@ def _guides(ax, curves, x_range, slopes) -> None:
         return
     x0, y0 = np.exp(np.mean(np.log(x))), np.exp(np.mean(np.log(y)))
     xg = np.geomspace(*x_range, 20)
-    for label, exponent, style in slopes:
-        if exponent is not None and np.isfinite(exponent):
+    for label, exponent, style, *ln_a in slopes:
+        if exponent is None or not np.isfinite(exponent):
+            continue
+        if ln_a and ln_a[0] is not None and np.isfinite(ln_a[0]):
+            ax.plot(xg, np.exp(ln_a[0]) * xg**exponent, label=label, **style)
+        else:
             ax.plot(xg, y0 * (xg / x0) ** exponent, label=label, **style)
 
 

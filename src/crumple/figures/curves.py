@@ -85,10 +85,10 @@ def plot_gamma(
                 ax.plot(x, y, "--", color=f"C{i}", lw=0.8,
                         label=theory_label if i == 0 else None)  # fmt: skip
         if slopes[k] is not None:
-            rng, (ours, sig), theirs = slopes[k]
+            rng, (ours, sig, *ln_a), theirs = slopes[k]
             _guides(ax, curves, rng, [
                 (f"ours: slope {ours:.2f} ± {sig:.2f} (pooled fit)", ours,
-                 {"color": "k", "lw": 2.0, "alpha": 0.7}),
+                 {"color": "k", "lw": 2.0, "alpha": 0.7}, *ln_a),
                 (f"paper: slope {theirs:g}", theirs, _PAPER_STYLE | {"lw": 2.0}),
             ])  # fmt: skip
         if fit_range is not None and xl == "λ":
@@ -126,7 +126,7 @@ def plot_radius(
     guides = []
     if alpha is not None:
         guides.append((f"ours: λ^{alpha[0]:.3f} ± {alpha[1]:.3f} (pooled fit)", alpha[0],
-                       {"color": "k", "lw": 2.0, "alpha": 0.7}))  # fmt: skip
+                       {"color": "k", "lw": 2.0, "alpha": 0.7}, *alpha[2:]))  # fmt: skip
     if paper_alpha is not None:
         guides.append((f"paper: λ^{paper_alpha:g}", paper_alpha, _PAPER_STYLE | {"lw": 2.0}))
     _guides(a, curves, fit_range, guides)
