@@ -13,6 +13,7 @@ loop count needs.
     python benchmarks/bench_loops.py --quick    # N = 10^3, 10^4
     python benchmarks/bench_loops.py --shapely  # also Shapely's node + polygonize (not a
                                                 # dependency: pip install shapely)
+    python benchmarks/bench_loops.py --fan 4000,16000   # the review's fixed-angle spiral
 """
 
 from __future__ import annotations
@@ -75,12 +76,63 @@ def snail(
     return contact * np.c_[np.interp(su, s, x), np.interp(su, s, y)]
 
 
+def fan(n_segments: int, *, per_turn: int = 40, spacing: float = 1.0) -> np.ndarray:
+    """An Archimedean spiral r = spacing θ/2π sampled at a fixed angle, ``per_turn`` segments a
+    turn (the review's case): segments grow with r (from ~0 at the centre to 2π r / per_turn
+    outside), so the outer turns' segments are many contact distances long while the inner
+    ones are far shorter than it. Lengths in units of ``spacing``."""
+    th = 2 * np.pi * np.arange(1, n_segments + 2) / per_turn
+    r = spacing * th / (2 * np.pi)
+    return np.c_[r * np.cos(th), r * np.sin(th)]
+
+
+def time_fan(sizes, c: float = 1.2) -> None:
+    """The review's case, and where its time goes: the exact crossing check
+    (``geometry.find_crossings``, geometry's) and the link conflicts (``loops.links``)."""
+    from crumple.geometry import find_crossings
+    from crumple.loops import links as lk_mod
+
+    calls = {"conflicts": 0.0}
+    real = lk_mod._link_conflicts
+
+    def timed(*a):
+        t0 = time.perf_counter()
+        out = real(*a)
+        calls["conflicts"] += time.perf_counter() - t0
+        return out
+
+    lk_mod._link_conflicts = timed
+    try:
+        loops(fan(200), contact_distance=c)  # compile
+        print(f"\n{'fan N':>7} {'loops s':>9} {'find_crossings s':>17} {'link conflicts s':>17}")
+        for n in sizes:
+            x = fan(n)
+            calls["conflicts"] = 0.0
+            t0 = time.perf_counter()
+            loops(x, contact_distance=c)
+            t1 = time.perf_counter()
+            find_crossings(x)
+            t2 = time.perf_counter()
+            print(f"{n:>7} {t1 - t0:>9.3f} {t2 - t1:>17.3f} {calls['conflicts']:>17.3f}")
+    finally:
+        lk_mod._link_conflicts = real
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--shapely", action="store_true", help="compare with shapely.polygonize")
+    ap.add_argument(
+        "--fan",
+        default="",
+        help="comma-separated N of the review's fixed-angle spiral (40 segments a turn), "
+        "e.g. 4000,16000,64000; alone, skips the rest",
+    )
     args = ap.parse_args(argv)
+    if args.fan:
+        time_fan([int(v) for v in args.fan.split(",")])
+        return
     sizes = [10**3, 10**4] if args.quick else [10**3, 10**4, 10**5]
     c = 1.0
     loops(wavy_spiral(200), contact_distance=c)  # compile

@@ -302,10 +302,11 @@ def test_run_outputs_never_mismatch_after_a_kill(capsys, tmp_path, monkeypatch, 
 
 def test_powell_has_its_own_budget_and_shows_stages(capsys, tmp_path):
     from crumple.cli import build_parser
-    from crumple.cli.run import POWELL_MAXITER, build_run
+    from crumple.cli.run import build_run
+    from crumple.protocol import DEFAULT_MAXITER
 
     args = build_parser().parse_args(["run", "--method", "powell"])
-    assert build_run(args)[1].maxiter == POWELL_MAXITER
+    assert build_run(args)[1].maxiter == DEFAULT_MAXITER["powell"] == 20
     args = build_parser().parse_args(["run", "--method", "powell", "--maxiter", "3"])
     assert build_run(args)[1].maxiter == 3
     assert build_run(build_parser().parse_args(["run"]))[1].maxiter == 5000  # Newton's
@@ -368,9 +369,10 @@ def test_export_then_energy_round_trip(capsys, tmp_path, ramp_file, fmt):
     code, out, err = run_cli(capsys, "energy", dest, *args)
     assert code == 0, err
     got = json.loads(out)
-    # an imperfect wire's rest angles are not a flag of crumple energy: compare the terms that
-    # do not see them, and the total of a perfect wire below
-    for k in ("stretching", "confinement", "hard_core"):
+    # the wire is imperfect (--rest-angle-sd 0.01): the export writes its rest angles beside
+    # the positions and the printed line passes them, so every term, bending included, agrees
+    assert "--rest-angles" in line and (tmp_path / "w.rest.npy").is_file()
+    for k in ("bending", "stretching", "confinement", "hard_core", "total"):
         assert got[k] == pytest.approx(getattr(stage.energy, k), rel=1e-12, abs=1e-300), k
 
 
@@ -438,3 +440,108 @@ def test_run_with_worker_processes_matches_the_library(capsys, tmp_path):
     for g, w in zip(got, want, strict=True):
         for sg, sw in zip(g.stages, w.stages, strict=True):
             np.testing.assert_array_equal(sg.positions, sw.positions)
+
+
+class _ClosedPipe:
+    """A stderr whose reader has gone (``2>&1 | head -n 1``)."""
+
+    def isatty(self):
+        return False
+
+    def write(self, text):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def flush(self):
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_progress_goes_quiet_on_a_closed_pipe(monkeypatch):
+    from types import SimpleNamespace
+
+    from crumple.cli.progress import JobProgress
+    from crumple.cli.run import Progress
+
+    job = JobProgress(stream=_ClosedPipe(), every=0.0, grace=0.0)
+    p = SimpleNamespace(total=2, done=2, failed=0, running=0, skipped=0)
+    job.sweep(p)  # must not raise
+    job.phase("drawing figures")
+    job.close()
+    assert job.quiet
+    monkeypatch.setattr("sys.stderr", _ClosedPipe())
+    prog = Progress(quiet=False, n_replicas=1, n_stages=2, every=0.0)
+    prog.stage(0, 0, 10.0, True)  # must not raise
+    assert prog.quiet
+
+
+@pytest.mark.parametrize("dpi", [0, -3])
+def test_animate_refuses_a_dpi_below_one(capsys, tmp_path, ramp_file, dpi):
+    code, out, err = run_cli(capsys, "animate", ramp_file, "-o", tmp_path / "a.gif", "--dpi", dpi)
+    assert "--dpi must be >= 1" in one_line_error(code, out, err)
+    assert not list(tmp_path.iterdir())  # nothing left behind
+
+
+def _stop_after_replica_0(monkeypatch, exc=KeyboardInterrupt):
+    """run_all that finishes replica 0, then is stopped as by Ctrl-C."""
+    import crumple.cli.run as clirun
+
+    real = clirun.run_all
+
+    def run_all(wire, ramp, n_rep, seed, workers, prog, done):
+        real(wire, ramp, 1, seed, workers, prog, done)
+        raise exc
+
+    monkeypatch.setattr(clirun, "run_all", run_all)
+
+
+def test_a_signal_while_publishing_keeps_every_replica(capsys, tmp_path, monkeypatch):
+    import signal
+
+    import crumple.cli.run as clirun
+
+    real, seen = clirun.publish, []
+
+    def publish(out, results, **kw):
+        seen.append(signal.getsignal(signal.SIGTERM))
+        if not kw.get("tag"):
+            raise KeyboardInterrupt  # Ctrl-C while the complete run is being written
+        return real(out, results, **kw)
+
+    monkeypatch.setattr(clirun, "publish", publish)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)
+    assert code == 130 and "kept the 2 finished replica(s) of 2" in err, err
+    assert seen[0] is clirun._on_sigterm  # the handler was still in place
+    with h5py.File(tmp_path / "ramps.interrupted.h5") as f:
+        assert f["positions"].shape[0] == 2
+
+
+def test_an_interrupted_overwrite_keeps_the_complete_old_results(capsys, tmp_path, monkeypatch):
+    assert run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)[0] == 0
+    old = (tmp_path / "ramps.h5").read_bytes()
+    _stop_after_replica_0(monkeypatch)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, "--kb", 8,
+                           "--overwrite", *RUN_SMALL)  # fmt: skip
+    assert code == 130 and "kept the 1 finished replica(s) of 2" in err, err
+    assert (tmp_path / "ramps.h5").read_bytes() == old
+    with h5py.File(tmp_path / "ramps.interrupted.h5") as f:
+        assert f["positions"].shape[0] == 1 and json.loads(f.attrs["wire"])["k_b"] == 8
+
+
+def test_a_second_signal_while_saving_is_ignored(capsys, tmp_path, monkeypatch):
+    import os
+    import signal
+
+    import crumple.cli.run as clirun
+
+    real = clirun.publish
+
+    def publish(out, results, **kw):
+        os.kill(os.getpid(), signal.SIGTERM)  # the impatient second kill
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(out, results, **kw)
+
+    _stop_after_replica_0(monkeypatch)
+    monkeypatch.setattr(clirun, "publish", publish)
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path, "--replicas", 2, *RUN_SMALL)
+    assert code == 130 and "kept the 1 finished replica(s)" in err, err
+    assert (tmp_path / "ramps.interrupted.h5").is_file()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

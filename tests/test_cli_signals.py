@@ -110,8 +110,9 @@ def test_sigint_keeps_finished_replicas(tmp_path):
     err += rest
     assert proc.returncode == 130, err
     assert "kept the 1 finished replica(s) of 3" in err, err
-    with h5py.File(tmp_path / "o" / "ramps.h5") as f:
+    with h5py.File(tmp_path / "o" / "ramps.interrupted.h5") as f:
         assert f["positions"].shape[0] == 1
         assert json.loads(f.attrs["interrupted"]) is True
         assert json.loads(f.attrs["replica_ids"]) == [0]
-    assert (tmp_path / "o" / "configurations.png").exists()
+    assert (tmp_path / "o" / "configurations.interrupted.png").exists()
+    assert not (tmp_path / "o" / "ramps.h5").exists()  # ramps.h5 is always a complete run

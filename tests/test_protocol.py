@@ -522,3 +522,17 @@ def test_no_accepted_stage_has_a_negative_eigenvalue(seed, n, continuum, lam_max
         if stage.result.converged:
             lowest = _lowest_curvature_per_length(wire, stage)
             assert lowest >= -protocol.STABILITY_TOL, (stage.lam, lowest)
+
+
+def test_maxiter_default_depends_on_the_method():
+    """Powell's budget is Ramp's, not the CLI's: a sweep or a script gets it too; Newton's
+    resolved default, and so every stored Newton run id, is unchanged."""
+    from crumple.protocol import Ramp
+    from crumple.sweep import Sweep
+
+    assert Ramp().maxiter == 5000 and Ramp().to_dict()["maxiter"] == 5000
+    assert Ramp(method="powell").maxiter == 20
+    assert Ramp(method="powell", maxiter=3).maxiter == 3
+    sweep = Sweep(wire={"n_segments": 8}, ramp={"lambdas": [1, 2], "method": "powell"})
+    assert next(iter(sweep.runs())).ramp.maxiter == 20
+    assert Ramp.from_dict(Ramp().to_dict()) == Ramp()

@@ -121,7 +121,7 @@ def test_table_deviation_bracket_and_one_alpha_range(smoke):
     out, _, _ = smoke
     md = (out / "report.md").read_text()
     assert "| \\|ours − paper\\|/σ |" in md  # escaped: a pipe would split the column
-    contact = next(ln for ln in md.splitlines() if "loops first touch" in ln)
+    contact = next(ln for ln in md.splitlines() if "λ of the first interior contact" in ln)
     assert "(a bracket, no σ)" in contact or "no contact" in contact
     lo, hi = paper.ALPHA_RANGE
     starts = ("| α ", "| \\|α\\| ", "| collapse exponent")

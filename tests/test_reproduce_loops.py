@@ -45,3 +45,28 @@ def test_n_of_lambda_is_what_the_sweep_stored(smoke):
     claim = next(c for c in res["claims"] if c["claim"].startswith("loops start to touch"))
     assert "loop definition" in claim["measured"] and "current definition" in claim["measured"]
     assert claim["verdict"] in ("consistent", "not consistent")
+
+
+def test_a_stage_without_loops_draws_undefined_and_keeps_the_report(monkeypatch):
+    """One bad stage at λ = 1000 (loops refuse its graph) must not abort the report."""
+    from types import SimpleNamespace
+
+    from crumple import stage_observables as so
+    from crumple.figures import plot_loop_count
+    from crumple.reproduce.fig2_loops import _picture
+
+    def refuse(*a, **k):
+        raise RuntimeError("the contact graph is not plane")
+
+    monkeypatch.setattr(so, "loops", refuse)
+    t = np.linspace(0, 2 * np.pi, 40)
+    x = np.c_[np.cos(t), np.sin(t)] * 0.3
+    lam = np.array([70.0, 1000.0])
+    el = SimpleNamespace(
+        lam=lam, hard_core=1e-5, positions=np.stack([x, x])[None, None],
+        j=lambda v: int(np.argmin(abs(lam - v))), valid=lambda p, r, j: True,
+    )  # fmt: skip
+    pic = _picture(el, 0)
+    assert pic["undefined"] and pic["lam"] == 1000.0
+    fig = plot_loop_count(lam, [[1, np.nan]], picture=pic)
+    assert "loops undefined" in fig.axes[1].get_title()

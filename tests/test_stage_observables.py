@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+from types import MappingProxyType
 
 import h5py
 import numpy as np
@@ -129,3 +130,38 @@ def test_a_store_written_before_the_observables_gets_them_computed_on_load(store
     assert got.attrs["observables_computed_on_load"] == 2
     for k in (*so.OBSERVABLES, "gamma"):
         np.testing.assert_array_equal(got[k], want[k])
+
+
+def test_one_contact_distance_everywhere():
+    """crumple measure, measure() and the stored contacts count at one distance, 2 d."""
+    import inspect as pyinspect
+
+    import crumple.cli.media
+    import crumple.cli.run
+    from crumple.model import Wire
+    from crumple.observables import measure
+    from crumple.stage_observables import CONTACT_DISTANCE, CONTACT_FACTOR
+
+    assert CONTACT_DISTANCE == CONTACT_FACTOR * Wire(k_b=1, k_s=1, n_segments=3).hard_core
+    assert pyinspect.signature(measure).parameters["contact_distance"].default == CONTACT_DISTANCE
+    for mod in (crumple.cli.media, crumple.cli.run):  # no copies of the factor
+        assert "CONTACT_FACTOR" not in vars(mod)
+
+
+def test_a_failing_observable_stores_nan_and_keeps_the_run(tmp_path, monkeypatch, caplog):
+    def boom(x, wire):
+        raise ZeroDivisionError("a bug in a new observable")
+
+    registry = dict(so.OBSERVABLES)
+    registry["boom"] = so.StageObservable(name="boom", units="1", doc="raises", func=boom)
+    monkeypatch.setattr(so, "OBSERVABLES", MappingProxyType(registry))
+    sweep = Sweep(wire={"n_segments": 12}, ramp={"lambdas": [1, 300]})
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "sweep.json").write_text(json.dumps(_manifest(sweep)))
+    (run,) = sweep.runs()
+    with caplog.at_level("WARNING", logger="crumple.stage_observables"):
+        assert execute_run(run.to_task(), str(tmp_path))["status"] == "done"
+    with h5py.File(tmp_path / "runs" / f"{run.id}.h5", "r") as f:
+        assert np.isnan(f["observables/boom"][()]).all()
+        assert np.isfinite(f["observables/r_max"][()]).all()
+    assert "'boom' failed at 2 stage(s)" in caplog.text and "ZeroDivisionError" in caplog.text

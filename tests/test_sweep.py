@@ -458,3 +458,31 @@ def test_sweep_files_in_the_docs_are_valid():
     assert len(sweeps) == 2
     assert sweeps[0].shape == (3, 2, 2, 10) and sweeps[0].replicas == 10
     assert list(sweeps[1].dims) == ["theta_p", "point"] and len(sweeps[1]) == 6
+
+
+_DAMAGE = [
+    (lambda m: m.pop("lambdas"), "'lambdas' is missing"),
+    (lambda m: m.update(lambdas=[1, "x"]), "finite numbers"),
+    (lambda m: m.update(lambdas=[10, 1]), "not increasing"),
+    (lambda m: m.pop("sweep"), "'sweep' is missing"),
+    (lambda m: m.update(sweep=[1]), "'sweep' is not a dict"),
+    (lambda m: m.update(replicas=0), "'replicas' is not a whole number"),
+    (lambda m: m["dims"][0].pop("name"), r"dims\[0\] has no 'name'"),
+    (lambda m: m["dims"][0].update(values=5), r"dims\[0\] \(k_b\) has no list of 'values'"),
+    (lambda m: m["runs"][0].update(index=[7]), r"runs\[0\] has an 'index'"),
+    (lambda m: m["runs"][0].pop("index"), r"runs\[0\] has an 'index'"),
+    (lambda m: m["runs"][0].update(index="a"), r"runs\[0\] has an 'index'"),
+    (lambda m: m["runs"][1].update(replica=3), r"runs\[1\] has a 'replica'"),
+]
+
+
+@pytest.mark.parametrize("damage, match", _DAMAGE, ids=[m for _, m in _DAMAGE])
+def test_load_of_a_damaged_manifest_is_one_valueerror(tmp_path, damage, match):
+    from crumple.sweep import _manifest
+
+    m = _manifest(Sweep(wire={"n_segments": 12, "k_b": [5.0, 8.0]}, ramp={"lambdas": [1, 10]}))
+    damage(m)
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "sweep.json").write_text(json.dumps(m))
+    with pytest.raises(ValueError, match=match):
+        load(tmp_path)

@@ -27,7 +27,7 @@ import numpy as np
 
 from crumple.fit import MeanEstimate, PowerLawFit, fit_power_law, mean_confidence_interval
 from crumple.geometry import close_segment_pairs, find_crossings
-from crumple.loops import LoopStats, loops
+from crumple.loops import LoopStats, loops, positive_length
 
 __all__ = [
     "LoopStats",
@@ -271,12 +271,7 @@ def count_contacts(positions, distance: float) -> int:
     (1, 0)
     """
     pos = _positions(positions)
-    try:
-        dist = float(distance)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"distance must be a positive number, got {distance!r}") from err
-    if not (math.isfinite(dist) and dist > 0):
-        raise ValueError(f"distance must be a positive contact distance, got {distance!r}")
+    dist = positive_length("distance", distance)
     pairs, _ = close_segment_pairs(pos, dist)
     return int(pairs.shape[0])
 
@@ -649,7 +644,7 @@ def measure(
     radii=None,
     rg: str = "r_max",
     fit_range=(0.5, 1.0),
-    contact_distance: float = 1e-5,
+    contact_distance: float = 2e-5,
     loop_distance: float | None = None,
 ) -> dict:
     """All observables of one wire as a JSON-able dict (what ``crumple measure`` prints).
@@ -659,8 +654,9 @@ def measure(
     * ``center``: ``[x, y]`` used for every radius (the centre of mass unless given);
     * ``r_max``: :func:`r_max` (the paper's R_G);
     * ``radius_of_gyration``: RMS radius, :func:`radius_of_gyration`;
-    * ``contacts``: :func:`count_contacts` at ``contact_distance`` (default ``1e-5``, the
-      hard-core width of Table I);
+    * ``contacts``: :func:`count_contacts` at ``contact_distance`` (default ``2e-5``: twice
+      the hard-core width of Table I, the distance of the contacts a sweep stores,
+      ``crumple.stage_observables.CONTACT_DISTANCE``);
     * ``crossings``: number of intersecting segment pairs,
       ``len(crumple.geometry.find_crossings(positions))`` (0 for a physical wire);
     * ``mass_size_exponent``: ``{"value", "stderr", "fit_range", "n_points", "rg"}`` from
@@ -668,7 +664,7 @@ def measure(
     * ``mass_within``: list of ``[R, M(R)]`` (Eq. 3, exact lengths) at ``radii``, or by default
       at 25 radii log-spaced from ``r_max / 100`` to ``r_max``;
     * ``loops``: :meth:`LoopStats.to_dict` of :func:`loops` at ``loop_distance`` (default
-      ``2 * contact_distance``, i.e. twice the hard-core width): ``count``,
+      ``contact_distance``, i.e. twice the hard-core width): ``count``,
       ``counts_by_depth``, ``area`` (the distribution's count, total, mean, min, quartiles,
       max), ``contact_distance``, ``min_width``; ``None`` for a wire that crosses itself.
 
@@ -687,7 +683,7 @@ def measure(
     contact_distance : float
         ``[length]``, > 0.
     loop_distance : float, optional
-        Contact distance of :func:`loops` ``[length]``, > 0. Default ``2 * contact_distance``.
+        Contact distance of :func:`loops` ``[length]``, > 0. Default ``contact_distance``.
 
     Returns
     -------
@@ -725,19 +721,8 @@ def measure(
             raise ValueError(f"radii must be a non-empty list of numbers, got {radii!r}")
         if not np.all(np.isfinite(table_r)) or np.any(table_r < 0):
             raise ValueError(f"radii must be finite and >= 0, got {radii!r}")
-    try:
-        dist = float(contact_distance)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"contact_distance must be a number, got {contact_distance!r}") from err
-    if not (math.isfinite(dist) and dist > 0):
-        raise ValueError(f"contact_distance must be positive, got {contact_distance!r}")
-    loop_dist = 2.0 * dist if loop_distance is None else loop_distance
-    try:
-        loop_dist = float(loop_dist)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"loop_distance must be a number, got {loop_distance!r}") from err
-    if not (math.isfinite(loop_dist) and loop_dist > 0):
-        raise ValueError(f"loop_distance must be positive, got {loop_distance!r}")
+    dist = positive_length("contact_distance", contact_distance)
+    loop_dist = dist if loop_distance is None else positive_length("loop_distance", loop_distance)
     fit = mass_size_exponent(pos, rg=rg, fit_range=(lo, hi), center=c)
     m = mass_within(pos, table_r, center=c)
     crossings = int(find_crossings(pos).shape[0])

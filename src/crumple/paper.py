@@ -161,7 +161,8 @@ PAPER_VALUES: MappingProxyType[str, PaperValue] = MappingProxyType(
             ),
             PaperValue(
                 "lambda_contact",
-                "λ at which loops first touch (k_b, k_s) = (5, 5e5)",
+                "λ of the first interior contact (both segments ≥ 10 % of the wire from the "
+                "ends), (k_b, k_s) = (5, 5e5)",
                 1000.0,
                 "Fig. 2 caption: 'Those local structures start to contact each other when "
                 "λ ≥ 1000'",

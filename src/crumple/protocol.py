@@ -34,6 +34,7 @@ from .minimize import MinimizeResult, newton, powell
 from .model import Wire
 
 __all__ = [
+    "DEFAULT_MAXITER",
     "PAPER_LAMBDAS",
     "STABILITY_TOL",
     "Ramp",
@@ -86,6 +87,10 @@ def default_schedule(
     return tuple(sorted(values))
 
 
+#: ``Ramp.maxiter``'s default per method: Newton iterations, Powell sweeps per stage.
+DEFAULT_MAXITER = {"newton": 5000, "powell": 20}
+
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Ramp:
     """A quasi-static confinement ramp.
@@ -107,10 +112,13 @@ class Ramp:
         ``newton`` reaches equilibrium (default); ``powell`` is the paper's method.
     ftol : float
         Equilibrium: largest node force ``[energy/length]`` at most ``ftol``. Default 1e-6.
-    maxiter : int
-        Iterations per stage (Newton iterations, or Powell sweeps). Default 5000: a snap-through
-        of an imperfect wire can take ~1300 Newton iterations through a region of negative
-        curvature (measured); the perfect default ramp needs at most ~350 per stage.
+    maxiter : int or None
+        Iterations per stage (Newton iterations, or Powell sweeps). Default (None) depends on
+        ``method`` (:data:`DEFAULT_MAXITER`) and is resolved here, so ``to_dict`` and the run
+        id hold the number: 5000 for Newton (a snap-through of an imperfect wire can take ~1300
+        Newton iterations through a region of negative curvature, measured; the perfect
+        default ramp needs at most ~350 per stage); 20 for Powell, whose iteration is a sweep
+        over all 2N directions (~4 s per stage at N = 100: 5000 would run for hours).
     max_step : float
         Largest node displacement per Newton step ``[length]``: the largest trust radius of
         :func:`crumple.minimize.newton`, which adapts below it. A length, independent of N
@@ -133,10 +141,12 @@ class Ramp:
     stop_tol: float | None = None
     method: Method = "newton"
     ftol: float = 1e-6
-    maxiter: int = 5000
+    maxiter: int | None = None
     max_step: float = 0.5
 
     def __post_init__(self):
+        if self.maxiter is None and self.method in DEFAULT_MAXITER:
+            object.__setattr__(self, "maxiter", DEFAULT_MAXITER[self.method])
         try:
             lams = tuple(float(v) for v in self.lambdas)
         except (TypeError, ValueError):

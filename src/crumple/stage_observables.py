@@ -19,6 +19,7 @@ Lengths are in units of L0, angles in radians (``docs/observables.md``).
 from __future__ import annotations
 
 import functools
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -31,6 +32,7 @@ from .model import Wire
 from .observables import r_max, radius_of_gyration
 
 __all__ = [
+    "CONTACT_DISTANCE",
     "CONTACT_FACTOR",
     "END_FRACTION",
     "OBSERVABLES",
@@ -39,11 +41,16 @@ __all__ = [
     "compute",
     "gamma",
     "is_straight",
+    "loops_or_none",
 ]
 
 #: A contact: two non-adjacent segments closer than this many hard-core widths ``d``. Also
 #: the contact distance of the loops, ``c = 2 d`` (``docs/observables.md``).
 CONTACT_FACTOR = 2.0
+#: The contact distance of a wire with Table I's hard core (``d = 1e-5``): ``2e-5``
+#: ``[length]``. ``crumple measure`` and :func:`crumple.observables.measure` count contacts
+#: and loops at this distance by default, so that they agree with the stored ``contacts``.
+CONTACT_DISTANCE = CONTACT_FACTOR * Wire.__dataclass_fields__["hard_core"].default
 #: "Interior" contacts: both segments at least this fraction of the wire from either end.
 END_FRACTION = 0.1
 #: A wire whose joints all turn by less than this ``[rad]`` is straight: its bending energy
@@ -92,13 +99,23 @@ def _loops(x: np.ndarray, wire: Wire) -> LoopStats | None:
 
 @functools.lru_cache(maxsize=4)
 def _loops_of(data: bytes, n: int, c: float) -> LoopStats | None:
-    x = np.frombuffer(data, dtype=float).reshape(n, 2)
+    return loops_or_none(np.frombuffer(data, dtype=float).reshape(n, 2), c)
+
+
+def loops_or_none(x: np.ndarray, contact_distance: float, *, boundaries: bool = False):
+    """:func:`crumple.loops.loops` of one stage, or None where its faces are undefined: a
+    wire that crosses itself, or a contact graph that round-off made non-plane (``loops``
+    refuses it with ``RuntimeError``). The guarded path of every caller that must not fail
+    for one bad stage: the stored observables (NaN) and the report's picture ("undefined").
+
+    ``x`` has shape ``(n_nodes, 2)`` ``[length]``; ``contact_distance`` ``[length]``.
+    """
     if find_crossings(x).shape[0]:
         return None
     try:
-        return loops(x, contact_distance=c)
-    except RuntimeError:  # loops' refusal of a graph that round-off made non-plane: NaN, and
-        return None  # the run (hours of minimisation) is still stored
+        return loops(x, contact_distance=contact_distance, boundaries=boundaries)
+    except RuntimeError:  # the run (hours of minimisation) is still stored
+        return None
 
 
 def _loop_number(what: Callable[[LoopStats], float]) -> Callable[[np.ndarray, Wire], float]:
@@ -112,6 +129,8 @@ def _loop_number(what: Callable[[LoopStats], float]) -> Callable[[np.ndarray, Wi
 def _entry(name, units, doc, func) -> tuple[str, StageObservable]:
     return name, StageObservable(name=name, units=units, doc=doc, func=func)
 
+
+_log = logging.getLogger(__name__)
 
 #: The registry, in the order ``load`` lists the variables. One line per observable.
 OBSERVABLES: MappingProxyType[str, StageObservable] = MappingProxyType(dict((
@@ -152,18 +171,28 @@ def compute(positions, wire: Wire, names=None) -> dict[str, np.ndarray]:
     -------
     dict
         name → float array, shape (S,).
+
+    An observable that raises at a stage gives NaN there, and one warning on the
+    ``crumple.stage_observables`` logger names it and its first error: a measurement is
+    never worth the simulation it measures (a sweep stores the run whatever happens here).
     """
     pos = np.asarray(positions, dtype=float)
     if pos.ndim != 3 or pos.shape[-1] != 2:
         raise ValueError(f"positions must have shape (stages, n_nodes, 2), got {pos.shape}")
     names = tuple(OBSERVABLES) if names is None else tuple(names)
     out = {k: np.full(pos.shape[0], np.nan) for k in names}
+    failed: dict[str, list] = {}  # name -> [stages, first error]
     for s in range(pos.shape[0]):
         x = pos[s]
         if not np.isfinite(x).all():
             continue
         for k in names:
-            out[k][s] = OBSERVABLES[k].func(x, wire)
+            try:
+                out[k][s] = OBSERVABLES[k].func(x, wire)
+            except Exception as exc:  # any bug of an observable: NaN, logged
+                failed.setdefault(k, [0, f"{type(exc).__name__}: {exc}"])[0] += 1
+    for k, (n, first) in failed.items():
+        _log.warning("observable %r failed at %d stage(s), stored as NaN (first: %s)", k, n, first)
     return out
 
 

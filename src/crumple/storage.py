@@ -56,6 +56,7 @@ from .protocol import Ramp, RampResult, Stage
 __all__ = [
     "FORMAT",
     "FORMAT_VERSION",
+    "atomic_path",
     "atomic_write_text",
     "load_ramps",
     "read_arrays",
@@ -155,7 +156,7 @@ def save_ramps(
             for c in _COUNTS:
                 counts[c][r, s] = getattr(st.result, c)
             msgs[r, s] = st.result.message
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = FORMAT
             f.attrs["format_version"] = FORMAT_VERSION
@@ -224,10 +225,19 @@ def _publish(tmp, path) -> None:
 
 
 @contextlib.contextmanager
-def _atomic(path: Path):
-    """Yield a temporary name beside ``path``; when the block succeeds, flush that file to disk
-    and rename it to ``path``; when it fails, delete it. Readers never see a partial file."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+def atomic_path(path, suffix: str = ".tmp"):
+    """Yield a temporary name beside ``path`` (``.NAME.<pid>.XXXX<suffix>``: unique, and the
+    pid says which process left it); when the block succeeds, flush that file to disk and
+    rename it to ``path``; when it fails, delete it. Readers never see a partial file.
+
+    The one write-then-rename of the package: ``crumple run``'s outputs, ``export``, ``plot``
+    and ``animate`` all write through it. ``suffix`` matters to writers that pick the format
+    from the name (``np.save`` appends ``.npy``, matplotlib reads ``.png``/``.mp4``).
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{path.name}.{os.getpid()}.", suffix=suffix, dir=path.parent or "."
+    )
     os.close(fd)
     try:
         yield tmp
@@ -241,7 +251,7 @@ def _atomic(path: Path):
 def atomic_write_text(path, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically: temporary file, fsync, rename."""
     path = Path(path)
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
     return path
 
@@ -329,7 +339,8 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
     Keys: ``lambda`` (S,), ``n_stages``, ``seconds`` (R,), ``energy/<term>`` and
     ``solver/<field>`` (R, S) (``solver/message`` as str), ``observables/<name>`` (R, S) for
     each per-stage observable the file holds, ``positions`` (R, S, n, 2) when asked for, and
-    ``attrs`` (the root attributes, JSON-decoded). Raises ``ValueError`` for a
+    ``attrs`` (the root attributes, JSON-decoded), and ``rest_angles`` (R, n - 2) for an
+    imperfect wire's file (NaN rows: replicas without). Raises ``ValueError`` for a
     file :func:`verify_ramps` rejects or whose data cannot be read: never returns partial data.
     """
     attrs = verify_ramps(path, run_id=run_id)
@@ -343,6 +354,8 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
                 out[name] = ds.asstr()[()] if name == "solver/message" else ds[()]
             for name, ds in f.get("observables", {}).items():
                 out[f"observables/{name}"] = ds[()]
+            if "rest_angles" in f:
+                out["rest_angles"] = f["rest_angles"][()]
     except (OSError, KeyError, RuntimeError) as exc:
         raise ValueError(f"{path} is damaged ({exc})") from None
     return out

@@ -53,8 +53,11 @@ def cmd_energy(args) -> int:
         plasticity=plasticity(args),
         trap_center=tuple(floats(args.center, "--center", 2)),
     )
+    rest = None
+    if args.rest_angles is not None:
+        rest = read_rest_angles(args.rest_angles, x.shape[0])
     with np.errstate(all="ignore"):  # overflow is caught below as a non-finite result
-        out = energy_terms(wire, x, args.lam).to_dict()
+        out = energy_terms(wire, x, args.lam, rest_angles=rest).to_dict()
         crossings = len(find_crossings(x))
     bad = [k for k, v in out.items() if not math.isfinite(v)]
     if bad:
@@ -74,17 +77,35 @@ def cmd_energy(args) -> int:
     return 0
 
 
+def read_rest_angles(path, n_nodes: int) -> np.ndarray:
+    """An imperfect wire's rest angles [rad], shape (n_nodes - 2,), from a .npy file (as
+    ``crumple export`` writes them beside the positions) or a text file of one angle a line."""
+    path = Path(path)
+    if not path.is_file():
+        raise CLIError(f"no such rest-angle file: {path}")
+    try:
+        a = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, ndmin=1)
+    except (OSError, ValueError) as exc:
+        raise CLIError(f"{path}: cannot read rest angles ({exc})") from None
+    a = np.asarray(a, dtype=float).ravel()
+    if a.shape != (n_nodes - 2,):
+        raise CLIError(
+            f"{path} holds {a.size} rest angle(s); a wire of {n_nodes} nodes has {n_nodes - 2}"
+        )
+    if not np.isfinite(a).all():
+        raise CLIError(f"{path}: the rest angles must be finite numbers [rad]")
+    return a
+
+
 # --------------------------------------------------------------------------------------------
 # crumple measure
 # --------------------------------------------------------------------------------------------
-
-#: ``crumple measure``'s default contact distance [length]: the hard-core width of Table I.
-CONTACT_DISTANCE = 1e-5
 
 
 def cmd_measure(args) -> int:
     from ..geometry import segment_lengths
     from ..observables import measure
+    from ..stage_observables import CONTACT_DISTANCE
 
     x = read_positions(args.file)
     dist = CONTACT_DISTANCE if args.contact_distance is None else args.contact_distance
@@ -130,8 +151,15 @@ def cmd_measure(args) -> int:
 _FORMATS = ("npy", "csv", "xyz")
 
 
+def rest_path(output) -> Path:
+    """Where ``crumple export -o OUTPUT`` writes an imperfect wire's rest angles:
+    ``w.csv`` -> ``w.rest.npy``."""
+    out = Path(output)
+    return out.with_name(f"{out.stem}.rest.npy")
+
+
 def cmd_export(args) -> int:
-    from ..storage import atomic_write_text
+    from ..storage import atomic_path, atomic_write_text
 
     fmt = args.format
     if fmt is None:
@@ -146,16 +174,25 @@ def cmd_export(args) -> int:
     x = res["positions"][r, s]
     lam = float(res["lambda"][s])
     wire = res["attrs"]["wire"]
-    hint = energy_command(wire, lam, args.output or "FILE")
+    rest = res.get("rest_angles")
+    rest = None if rest is None or np.isnan(rest[r]).all() else rest[r]
+    rest_file = rest_path(args.output or "FILE") if rest is not None else None
+    if rest is not None and not args.output:
+        _warn(
+            f"{args.file} is an imperfect wire: its rest angles [rad], which its bending "
+            "energy needs, go to a file beside the positions; export with -o FILE to get them"
+        )
+    hint = energy_command(wire, lam, args.output or "FILE", rest_angles=rest_file)
     header = (
         f"crumple export of {args.file}: replica {r}, stage {s}, lambda = {lam:g}, "
         f"{x.shape[0]} nodes [length]; energy: {hint}"
     )
+    if rest_file is not None and args.output:
+        with atomic_path(rest_file, suffix=".npy") as tmp:
+            np.save(tmp, rest)
     if fmt == "npy":
-        out = Path(args.output)
-        tmp = out.with_name(f".{out.name}.tmp.npy")
-        np.save(tmp, x)
-        tmp.replace(out)
+        with atomic_path(args.output, suffix=".npy") as tmp:
+            np.save(tmp, x)
     else:
         if fmt == "csv":
             rows = "\n".join(f"{a!r},{b!r}" for a, b in x.tolist())
@@ -172,9 +209,12 @@ def cmd_export(args) -> int:
     return 0
 
 
-def energy_command(wire: dict, lam: float, path) -> str:
-    """The ``crumple energy`` line that recomputes a stored stage's energy from its export."""
+def energy_command(wire: dict, lam: float, path, rest_angles=None) -> str:
+    """The ``crumple energy`` line that recomputes a stored stage's energy from its export
+    (with ``--rest-angles FILE`` for an imperfect wire)."""
     parts = [f"crumple energy {path} --kb {wire['k_b']!r} --ks {wire['k_s']!r} --lam {lam!r}"]
+    if rest_angles is not None:
+        parts.append(f"--rest-angles {rest_angles}")
     if wire.get("length", 1.0) != 1.0:
         parts.append(f"--length {wire['length']!r}")
     if wire.get("confinement", "per-length") != "per-length":
@@ -213,6 +253,11 @@ def register(sub) -> None:
     p.add_argument("--lam", type=float, required=True, help="trap strength λ [energy/length²]")
     p.add_argument("--length", default="1", help="rest length L0 of the wire [length], or 'auto'")
     p.add_argument("--center", default="0,0", help="trap centre x,y [length]")
+    p.add_argument(
+        "--rest-angles",
+        help="an imperfect wire's rest angles [rad]: .npy or text, n_nodes - 2 values (crumple "
+        "export -o FILE writes them to FILE's stem + .rest.npy); default: a straight wire",
+    )
     p.set_defaults(func=cmd_energy)
 
     p = sub.add_parser("measure", help="observables of a configuration, as JSON")
@@ -224,13 +269,13 @@ def register(sub) -> None:
     p.add_argument(
         "--contact-distance",
         type=float,
-        help=f"contact distance [length] (default {CONTACT_DISTANCE:g}, the hard-core width of "
-        "Table I; warns when it is not below the shortest segment)",
+        help="contact distance [length] (default 2e-5 = 2 × the hard-core width of Table I, "
+        "as the contacts a sweep stores; warns when it is not below the shortest segment)",
     )
     p.add_argument(
         "--loop-distance",
         type=float,
-        help="the loops' contact distance [length] (default 2 × the contact distance; "
+        help="the loops' contact distance [length] (default: the contact distance; "
         "docs/observables.md)",
     )
     p.set_defaults(func=cmd_measure)
@@ -242,5 +287,10 @@ def register(sub) -> None:
     )
     add_stage_flags(p, lam_help="trap strength λ of the stage (default: the last stage)")
     p.add_argument("--format", choices=_FORMATS, help="npy, csv or xyz (default: from -o)")
-    p.add_argument("-o", "--output", help="output file (default: standard output, csv/xyz)")
+    p.add_argument(
+        "-o",
+        "--output",
+        help="output file (default: standard output, csv/xyz); an imperfect wire's rest "
+        "angles [rad] go beside it, to its stem + .rest.npy (w.csv -> w.rest.npy)",
+    )
     p.set_defaults(func=cmd_export)

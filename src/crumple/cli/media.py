@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -13,14 +12,6 @@ from .inspect import add_stage_flags
 from .results import read_results, replica_index, stage_index
 
 __all__ = ["cmd_animate", "cmd_plot", "register"]
-
-#: Contacts drawn: segments closer than this many hard-core widths (as ``crumple run``).
-CONTACT_FACTOR = 2.0
-
-
-def _tmp_beside(path: Path) -> Path:
-    # same suffix: Matplotlib picks the format (and the animation writer) from it
-    return path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
 
 
 def _title(attrs: dict, r: int) -> str:
@@ -37,6 +28,8 @@ def cmd_plot(args) -> int:
     from ..figures import plot_configurations
     from ..geometry import close_segment_pairs
     from ..protocol import PAPER_LAMBDAS
+    from ..stage_observables import CONTACT_FACTOR
+    from ..storage import atomic_path
 
     res = read_results(args.file)
     r = replica_index(res, args.file, args.replica)
@@ -67,12 +60,9 @@ def cmd_plot(args) -> int:
         contact_distance=d,
         common_scale=not args.own_scale,
     )
-    tmp = _tmp_beside(out)
-    try:
+    # the temporary name keeps the suffix: Matplotlib picks the format from it
+    with atomic_path(out, suffix=out.suffix) as tmp:
         fig.savefig(tmp, dpi=130)
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
     print(f"crumple: wrote {out}", file=sys.stderr)
     return 0
 
@@ -81,9 +71,12 @@ def cmd_animate(args) -> int:
     from matplotlib import animation
 
     from ..figures import ramp_animation
+    from ..storage import atomic_path
 
     if not (0 < args.fps <= 100):
         raise CLIError(f"--fps must be in (0, 100], got {args.fps:g}")
+    if args.dpi < 1:
+        raise CLIError(f"--dpi must be >= 1 [dots per inch], got {args.dpi}")
     out = Path(args.output)
     suffix = out.suffix.lower()
     if suffix == ".gif":
@@ -106,12 +99,9 @@ def cmd_animate(args) -> int:
         converged=res["solver/converged"][r, :n],
         title=_title(res["attrs"], r),
     )
-    tmp = _tmp_beside(out)
-    try:
+    # the temporary name keeps the suffix: Matplotlib picks the writer's format from it
+    with atomic_path(out, suffix=out.suffix) as tmp:
         anim.save(tmp, writer=writer, dpi=args.dpi)
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
     print(f"crumple: wrote {out} ({n} frames, one per stage)", file=sys.stderr)
     return 0
 
@@ -132,5 +122,5 @@ def register(sub) -> None:
                    help=".gif (Pillow, no ffmpeg needed) or .mp4 (needs ffmpeg)")  # fmt: skip
     p.add_argument("--replica", type=int, default=0, help="replica index")
     p.add_argument("--fps", type=float, default=5.0, help="frames (stages) per second")
-    p.add_argument("--dpi", type=int, default=100, help="resolution [dots per inch]")
+    p.add_argument("--dpi", type=int, default=100, help="resolution [dots per inch], >= 1")
     p.set_defaults(func=cmd_animate)

@@ -16,6 +16,8 @@ import time
 from collections.abc import Mapping
 from typing import Any, TextIO
 
+from ..sweep.execute import eta_seconds
+
 __all__ = ["JobProgress", "duration", "progress_line"]
 
 
@@ -38,6 +40,11 @@ def duration(seconds: float | None) -> str:
 def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: int = 0) -> str:
     """The state of a job in one line.
 
+    The ETA is the time the remaining stages take at the rate of the stages done in this
+    session (stages of runs found already done do not count towards the rate); ``?`` until a
+    stage is done. Stages of runs in flight count as their workers report them, so the ETA
+    and the count move during a long first ramp.
+
     Parameters
     ----------
     phase : str
@@ -50,11 +57,8 @@ def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: 
     bar : int
         Width of a ``[###...]`` bar (0: none, for logs).
 
-    The ETA is the time the remaining stages take at the rate of the stages done in this
-    session (stages of runs found already done do not count towards the rate); ``?`` until a
-    stage is done. Stages of runs in flight count as their workers report them, so the ETA
-    and the count move during a long first ramp.
-
+    Examples
+    --------
     >>> from types import SimpleNamespace as P
     >>> a = P(total=32, done=14, failed=0, running=2, skipped=0, stages=300,
     ...       stages_total=640, stages_skipped=0)
@@ -76,12 +80,12 @@ def progress_line(phase: str, parts: Mapping[str, Any], *, elapsed: float, bar: 
     work = st - st_skip
     if st_total:
         frac = st / st_total
-        eta = elapsed / work * (st_total - st) if work > 0 else None
+        eta = eta_seconds(elapsed, work, st_total - st)
         count = f"{done}/{total} ramps, {st}/{st_total} stages ({math.floor(100 * frac)}%)"
     else:  # reports without stage counts: runs only
         frac = (done + failed) / max(total, 1)
         fresh = done + failed - sum(p.skipped for p in ps)
-        eta = elapsed / fresh * (total - done - failed) if fresh > 0 else None
+        eta = eta_seconds(elapsed, fresh, total - done - failed)
         count = f"{done}/{total} ramps"
     if done + failed == total:
         eta = 0.0
@@ -143,35 +147,41 @@ class JobProgress:
         finished = all(p.done + p.failed == p.total for p in self.parts.values())
         if not finished and now - self.last < (0.5 if self.tty else self.every):
             return
-        # in a log, the first line waits until every experiment has reported once (each
-        # reports as soon as it has checked its store), so that its totals are the job's
+        # in a log, the first line waits a fixed min(grace, every) seconds: long enough, in
+        # practice, for every experiment to report once (each reports as soon as it has
+        # checked its store), so that the first line's totals are usually the job's; it does
+        # not wait for the reports themselves (an experiment slow to start shows up later)
         if not finished and not self.tty and now - self.t0 < min(self.grace, self.every):
             return
         self.last = now
         line = progress_line(self.name, self.parts, elapsed=now - self.t0, bar=20 * self.tty)
         if self.tty:
-            self.stream.write(f"\r{line}\x1b[K")
-            self.open = True
+            self._emit(f"\r{line}\x1b[K")
+            self.open = not self.quiet
         else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
+            self._emit(line + "\n")
+
+    def _emit(self, text: str) -> None:
+        """Write and flush; if the stream is gone (a closed pipe: ``2>&1 | head``), go quiet
+        instead of failing the job: the display is a courtesy, the results are the point."""
+        try:
+            self.stream.write(text)
+            self.stream.flush()
+        except OSError:
+            self.quiet, self.open = True, False
 
     def close(self) -> None:
         """End a rewritten line (on a terminal) so that what follows starts on its own."""
         with self.lock:
-            if self.open:
-                self.stream.write("\n")
-                self.stream.flush()
-                self.open = False
+            if self.open and not self.quiet:
+                self._emit("\n")
+            self.open = False
 
     def phase(self, message: str) -> None:
         """A line such as ``drawing figures: fig4_gamma (3/9)``, after the progress line."""
         if self.quiet:
             return
         with self.lock:
-            if self.open:
-                self.stream.write("\n")
-                self.open = False
             elapsed = duration(time.monotonic() - self.t0)
-            self.stream.write(f"crumple: {message} ({elapsed} elapsed)\n")
-            self.stream.flush()
+            self._emit(("\n" if self.open else "") + f"crumple: {message} ({elapsed} elapsed)\n")
+            self.open = False

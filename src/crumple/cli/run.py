@@ -10,8 +10,13 @@ What it guarantees:
   at any point leaves the old pair, the old results without a figure, the new results without
   a figure, or the new pair, never results beside another run's figure (``crumple plot``
   redraws a missing figure);
-* Ctrl-C or SIGTERM stops every worker process within seconds and says what was kept (the
-  replicas that had finished are written, marked ``interrupted``).
+* Ctrl-C or SIGTERM stops every worker process within seconds and says what was kept: the
+  replicas that had finished are written to ``OUT/ramps.interrupted.h5`` (and
+  ``configurations.interrupted.png``), marked ``interrupted``, never to ``ramps.h5``, so that
+  ``ramps.h5`` is always a complete run and ``--overwrite`` never replaces a complete old one
+  with a partial set. The handler stays in place until the outputs are published (a signal
+  while publishing keeps every replica), and further signals are ignored while the finished
+  replicas are being saved.
 """
 
 from __future__ import annotations
@@ -29,15 +34,7 @@ import numpy as np
 
 from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
 
-__all__ = ["POWELL_MAXITER", "cmd_run", "register"]
-
-#: Powell's default budget per stage in ``crumple run``, in sweeps over all directions (the
-#: full reproduction's setting; ~4 s per stage at N = 100). ``Ramp.maxiter``'s default (5000)
-#: counts Newton iterations and would let Powell run for hours.
-POWELL_MAXITER = 20
-#: Contacts drawn on the figure: segments closer than this many hard-core widths (as in the
-#: reproduction report).
-CONTACT_FACTOR = 2.0
+__all__ = ["cmd_run", "register"]
 
 _WIRE_KEYS = {
     "kb": "k_b",
@@ -106,8 +103,6 @@ def build_run(args):
         v = getattr(args, key)
         if v is not None:
             r[key] = v
-    if r.get("method") == "powell" and "maxiter" not in r:
-        r["maxiter"] = POWELL_MAXITER
     if args.lambdas is not None:
         r["lambdas"] = floats(args.lambdas, "--lambdas")
     elif "lambdas" not in r:
@@ -215,12 +210,15 @@ class Progress:
     def _write(self, line: str, force: bool = False) -> None:
         if self.quiet:
             return
-        if self.tty:
-            sys.stderr.write(f"\r{line}   ")
-        elif force or time.monotonic() - self.last >= self.every:
-            self.last = time.monotonic()
-            sys.stderr.write(line + "\n")
-        sys.stderr.flush()
+        try:
+            if self.tty:
+                sys.stderr.write(f"\r{line}   ")
+            elif force or time.monotonic() - self.last >= self.every:
+                self.last = time.monotonic()
+                sys.stderr.write(line + "\n")
+            sys.stderr.flush()
+        except OSError:  # stderr closed (e.g. `2>&1 | head`): go quiet, keep computing
+            self.quiet = True
 
     def stage(self, r: int, i: int, lam: float, converged: bool) -> None:
         self.stages_done[r] = i + 1
@@ -340,6 +338,7 @@ def draw(results, wire, lambdas, *, replica: int = 0):
     """The Fig. 2-style figure of one replica at ``lambdas`` (those it reached)."""
     from ..figures import plot_configurations
     from ..geometry import close_segment_pairs
+    from ..stage_observables import CONTACT_FACTOR
 
     first = results[0]
     shown = [lam for lam in lambdas if any(s.lam == lam for s in first.stages)]
@@ -363,25 +362,22 @@ def draw(results, wire, lambdas, *, replica: int = 0):
     )
 
 
-def publish(out: Path, results, *, seed, fig, attrs=None) -> tuple[Path, Path]:
-    """Write ``ramps.h5`` and ``configurations.png`` so that they always match (module
-    docstring)."""
-    from ..storage import save_ramps
+def publish(out: Path, results, *, seed, fig, attrs=None, tag: str = "") -> tuple[Path, Path]:
+    """Write ``ramps<tag>.h5`` and ``configurations<tag>.png`` so that they always match
+    (module docstring); ``tag=".interrupted"`` for the replicas kept after a signal."""
+    from ..storage import atomic_path, save_ramps
 
-    h5, png = out / "ramps.h5", out / "configurations.png"
-    tag = f"{os.getpid()}.tmp"
-    tmp_png, tmp_h5 = out / f".configurations.{tag}.png", out / f".ramps.{tag}.h5"
-    try:
+    h5, png = out / f"ramps{tag}.h5", out / f"configurations{tag}.png"
+    # atomic_path renames on leaving its block, the inner block first: so the order is
+    # 1. the old figure goes (no moment shows it beside new results), 2. the new results are
+    # renamed into place, 3. then their figure; a failure anywhere deletes the temporaries
+    with atomic_path(png, suffix=".png") as tmp_png:
         fig.savefig(tmp_png, dpi=130)
-        _fsync(tmp_png)
-        save_ramps(tmp_h5, results, seed=seed, attrs=attrs)  # flushed to disk by save_ramps
-        png.unlink(missing_ok=True)  # 1. the old figure: no moment shows it beside new results
-        os.replace(tmp_h5, h5)  # 2. the new results
-        os.replace(tmp_png, png)  # 3. their figure
-        _fsync(out)
-    finally:
-        tmp_png.unlink(missing_ok=True)
-        tmp_h5.unlink(missing_ok=True)
+        with atomic_path(h5, suffix=".h5") as tmp_h5:
+            save_ramps(tmp_h5, results, seed=seed, attrs=attrs)
+            png.unlink(missing_ok=True)  # 1.
+        # 2. done on leaving the inner block; 3. on leaving this one
+    _fsync(out)
     return h5, png
 
 
@@ -425,17 +421,17 @@ def cmd_run(args) -> int:
     main_thread = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
     t0 = time.perf_counter()
-    try:
+    try:  # the handler stays through publishing: a signal there still keeps every replica
         run_all(wire, ramp, n_rep, seed, workers, prog, done)
+        elapsed = time.perf_counter() - t0
+        results = [done[r] for r in range(n_rep)]
+        fig = draw(results, wire, run["figure_lambdas"])
+        h5, png = publish(out, results, seed=seed, fig=fig)
     except (KeyboardInterrupt, Terminated) as exc:
         return _interrupted(exc, out, done, n_rep, wire, seed, run)
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, old)
-    elapsed = time.perf_counter() - t0
-    results = [done[r] for r in range(n_rep)]
-    fig = draw(results, wire, run["figure_lambdas"])
-    h5, png = publish(out, results, seed=seed, fig=fig)
     failed = [(r, lam, msg) for r, res in enumerate(results) for lam, msg in res.failed_stages]
     summary = {
         "results": str(h5),
@@ -454,7 +450,22 @@ def cmd_run(args) -> int:
 
 
 def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int:
-    """After Ctrl-C or SIGTERM: the workers are stopped; keep the finished replicas."""
+    """After Ctrl-C or SIGTERM: the workers are stopped; keep the finished replicas in
+    ``ramps.interrupted.h5`` (never over a complete ``ramps.h5``), ignoring further signals
+    while they are saved (a second Ctrl-C must not cost them, nor print a traceback)."""
+    main_thread = threading.current_thread() is threading.main_thread()
+    saved = {}
+    if main_thread:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            saved[sig] = signal.signal(sig, signal.SIG_IGN)
+    try:
+        return _keep_finished(exc, out, done, n_rep, wire, seed, run)
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+
+
+def _keep_finished(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int:
     what = "terminated" if isinstance(exc, Terminated) else "interrupted"
     code = 143 if isinstance(exc, Terminated) else 130
     sys.stderr.write("\n" if sys.stderr.isatty() else "")
@@ -468,11 +479,12 @@ def _interrupted(exc, out: Path, done: dict, n_rep: int, wire, seed, run) -> int
     kept = sorted(done)
     results = [done[r] for r in kept]
     fig = draw(results, wire, run["figure_lambdas"], replica=kept[0])
-    h5, _ = publish(out, results, seed=seed, fig=fig,
+    h5, _ = publish(out, results, seed=seed, fig=fig, tag=".interrupted",
                     attrs={"interrupted": True, "replica_ids": kept})  # fmt: skip
     print(
         f"crumple: {what}: kept the {len(kept)} finished replica(s) of {n_rep} "
-        f"(replica ids {kept}) in {h5}, marked 'interrupted'; rerun with --overwrite for all",
+        f"(replica ids {kept}) in {h5}, marked 'interrupted' ({out / 'ramps.h5'} is "
+        "untouched); rerun for all",
         file=sys.stderr,
     )
     return code
@@ -487,7 +499,7 @@ _FLAGS = [
      "geometric 1 … 2000 plus 70, 200, 300, 1000)"),
     ("--ftol", float, "equilibrium: largest node force [energy/length] (default 1e-6)"),
     ("--maxiter", int, "budget per stage: Newton iterations (default 5000) or Powell sweeps "
-     f"(default {POWELL_MAXITER})"),
+     "(default 20): Ramp's default for the method"),
     ("--max-step", float, "largest Newton node step, the trust radius cap [length] (default 0.5)"),
     ("--initial-noise", float,
      "transverse noise of the initial wire [segment lengths] (default 0.01)"),

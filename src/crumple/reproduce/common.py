@@ -134,6 +134,18 @@ def _fit_replicas(x, y) -> Estimate:
     return _combine(vals, errs, (lo, hi) if vals else None)
 
 
+def _fit_log_prefactor(x, y) -> float:
+    """ln of the prefactor of the same per-replica fits as :func:`_fit_replicas`, averaged
+    over the replicas (NaN if none): with the exponent, the fitted line that a figure draws."""
+    x = np.asarray(x, float)
+    vals = []
+    for yr in np.atleast_2d(np.asarray(y, float)):
+        ok = np.isfinite(yr) & (yr > 0)
+        if ok.sum() >= 3:
+            vals.append(math.log(fit_power_law(x[ok], yr[ok]).prefactor))
+    return float(np.mean(vals)) if vals else math.nan
+
+
 def _trend(a: Estimate, b: Estimate) -> Estimate:
     """|a| - |b| with the two uncertainties added in quadrature."""
     return Estimate(abs(a.value) - abs(b.value), math.hypot(a.sigma, b.sigma), min(a.n, b.n))

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import paper
-from ..loops import loops
+from ..stage_observables import loops_or_none
 from .common import Context, Record
 from .experiments import ELASTIC
 from .fig2_configurations import _onset
@@ -42,12 +42,16 @@ def _bracket(onsets) -> tuple[float, float] | None:
 
 
 def _picture(el, p: int) -> dict | None:
-    """Replica 0 at λ = 1000 with its loops (boundaries for the drawing)."""
+    """Replica 0 at λ = 1000 with its loops (boundaries for the drawing); where its loops are
+    undefined (the wire crosses itself, or round-off made its contact graph non-plane), the
+    wire alone with ``undefined: True``: one bad stage must not cost the report."""
     j = el.j(LAM_PICTURE)
     if not (el.valid(p, 0, j) and np.isclose(el.lam[j], LAM_PICTURE)):
         return None
     x = el.positions[p, 0, j]
-    st = loops(x, contact_distance=CONTACT_FACTOR * el.hard_core, boundaries=True)
+    st = loops_or_none(x, CONTACT_FACTOR * el.hard_core, boundaries=True)
+    if st is None:
+        return {"lam": float(el.lam[j]), "positions": x, "undefined": True}
     return {
         "lam": float(el.lam[j]),
         "positions": x,

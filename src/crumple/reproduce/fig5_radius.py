@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import paper
 from ..fit import collapse, fit_power_law
-from .common import Context, Estimate, Record, _alt, _jsonable, _pool, _row
+from .common import Context, Estimate, Record, _alt, _fit_log_prefactor, _jsonable, _pool, _row
 from .experiments import ELASTIC
 from .series import Series, _alpha, _local_slopes
 
@@ -79,6 +79,17 @@ def _figure_data(el: Series, c: float) -> dict:
     }
 
 
+def _alpha_log_prefactor(el: Series, points) -> float:
+    """ln of the prefactor of the pooled α fit: per point, the replica-mean ln prefactor of
+    the same fits of R_g(λ) over paper.ALPHA_RANGE as the exponent; then the mean over the
+    points. With α, the line drawn as "ours (pooled fit)" in Fig. 5a."""
+    lo, hi = paper.ALPHA_RANGE
+    sel = (el.lam >= lo) & (el.lam <= hi)
+    vals = [_fit_log_prefactor(el.lam[sel], el.obs["r_max"][p][:, sel]) for p in points]
+    vals = [v for v in vals if np.isfinite(v)]
+    return float(np.mean(vals)) if vals else float("nan")
+
+
 def measure(ctx: Context) -> Record:
     """α, its local slopes and the collapse, from the ``elastic`` store."""
     el = ctx.series["elastic"]
@@ -123,6 +134,7 @@ def measure(ctx: Context) -> Record:
     extra = {
         "local_slopes_in_range": [min(in_range), max(in_range)] if in_range else None,
         "alpha_points": {f"{k[0]:g}, {k[1]:g}": v for k, v in alpha_points.items()},
+        "alpha_log_prefactor": _alpha_log_prefactor(el, fig3),
         "collapse": {
             "exponent": cf.exponent,
             "stderr": cf.stderr,
@@ -155,7 +167,7 @@ def draw(rec: Record) -> dict:
         fit_range=paper.ALPHA_RANGE,
         master=(*d["master"], f"reference ({kb:g}, {ks:g}) fitted"),
         paper_alpha=-0.25,
-        alpha=(alpha["ours"], alpha["sigma"]),
+        alpha=(alpha["ours"], alpha["sigma"], rec.extra["alpha_log_prefactor"]),
         collapse_label=f"R_g (g_ref / k_b k_s)^c, g_ref = {kb:g} × {ks:g}; fitted c = {c:.3f}",
     )
     return {"fig5_radius": fig}

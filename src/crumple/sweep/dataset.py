@@ -62,46 +62,23 @@ def load(path, *, positions: bool = False):
     :class:`IncompleteSweepWarning` says how many; a damaged file is never read as data.
     See ``docs/sweeps.md``.
     """
-    import pandas as pd
     import xarray as xr
 
     out = Path(path)
-    m = _read_manifest(out)
+    m = _read_manifest(out, for_load=True)
     lam = np.asarray(m["lambdas"], dtype=float)
-    coords: dict[str, Any] = {}
-    shape: list[int] = []
-    names: list[str] = []
-    for d in m["dims"]:
-        if "levels" in d:
-            mi = pd.MultiIndex.from_tuples([tuple(v) for v in d["values"]], names=d["levels"])
-            coords.update(xr.Coordinates.from_pandas_multiindex(mi, d["name"]))
-        else:
-            coords[d["name"]] = d["values"]
-        names.append(d["name"])
-        shape.append(len(d["values"]))
+    coords, names, shape = _grid_coords(m["dims"])
     n_rep = int(m["replicas"])
     run_shape = (*shape, n_rep)
-    stage_shape = (*run_shape, len(lam))
     data, per_run, pos_arrays, bad, recomputed = _read_runs(out, m, lam, run_shape, positions)
-    done, seconds, n_stages, ids = per_run
+    done = per_run[0]
     data["gamma"] = stage_observables.gamma(
         data["E_stretching"], data["E_bending"], data["max_turning_angle"]
     )
-    sdims = (*names, "replica", "lam")
-    rdims = (*names, "replica")
-    variables = {k: (sdims, v) for k, v in data.items()}
-    variables.update(
-        done=(rdims, done),
-        seconds=(rdims, seconds),
-        n_stages=(rdims, n_stages),
-        run_id=(rdims, ids.astype(str)),
-    )
+    variables = _variables(names, data, per_run)
     if positions:
-        n_max = max((p.shape[-2] for _, p in pos_arrays.values()), default=0)
-        pos = np.full((*stage_shape, n_max, 2), np.nan)
-        for at, (j, p) in pos_arrays.items():
-            pos[(*at, j, slice(0, p.shape[-2]))] = p
-        variables["positions"] = ((*sdims, "node", "xy"), pos)
+        sdims = (*names, "replica", "lam")
+        variables["positions"] = ((*sdims, "node", "xy"), _positions(pos_arrays, run_shape, lam))
         coords["xy"] = ["x", "y"]
     coords["replica"] = np.arange(n_rep)
     coords["lam"] = lam
@@ -125,6 +102,52 @@ def load(path, *, positions: bool = False):
             stacklevel=2,
         )
     return ds
+
+
+def _grid_coords(dims: list) -> tuple[dict[str, Any], list[str], list[int]]:
+    """The coordinates of the manifest's ``dims`` (a ``point`` MultiIndex where the grid is a
+    list of points), their names and sizes."""
+    import pandas as pd
+    import xarray as xr
+
+    coords: dict[str, Any] = {}
+    names: list[str] = []
+    shape: list[int] = []
+    for d in dims:
+        if "levels" in d:
+            mi = pd.MultiIndex.from_tuples([tuple(v) for v in d["values"]], names=d["levels"])
+            coords.update(xr.Coordinates.from_pandas_multiindex(mi, d["name"]))
+        else:
+            coords[d["name"]] = d["values"]
+        names.append(d["name"])
+        shape.append(len(d["values"]))
+    return coords, names, shape
+
+
+def _variables(names: list[str], data: dict, per_run: tuple) -> dict:
+    """The data variables: per stage over (*names, replica, lam), per run over (*names,
+    replica)."""
+    done, seconds, n_stages, ids = per_run
+    sdims = (*names, "replica", "lam")
+    rdims = (*names, "replica")
+    variables = {k: (sdims, v) for k, v in data.items()}
+    variables.update(
+        done=(rdims, done),
+        seconds=(rdims, seconds),
+        n_stages=(rdims, n_stages),
+        run_id=(rdims, ids.astype(str)),
+    )
+    return variables
+
+
+def _positions(pos_arrays: dict, run_shape: tuple, lam: np.ndarray) -> np.ndarray:
+    """Every run's positions in one array (*run_shape, lam, node, xy), NaN-padded to the
+    largest wire."""
+    n_max = max((p.shape[-2] for _, p in pos_arrays.values()), default=0)
+    pos = np.full((*run_shape, len(lam), n_max, 2), np.nan)
+    for at, (j, p) in pos_arrays.items():
+        pos[(*at, j, slice(0, p.shape[-2]))] = p
+    return pos
 
 
 def _read_runs(out: Path, m: dict, lam: np.ndarray, run_shape: tuple, positions: bool):

@@ -422,7 +422,7 @@ def _execute(client, todo, out, total, skipped, progress, refresh, t0, stages_to
                 started = {k: v for k, v in list(in_flight.items()) if k not in finished_ids}
                 work = sum(n_stages[k] for k in finished_ids) + sum(started.values())
                 elapsed = now - t0
-                eta = _eta(elapsed, work, planned)
+                eta = eta_seconds(elapsed, work, planned - work)
                 progress(
                     Progress(
                         total=total,
@@ -447,12 +447,14 @@ def _execute(client, todo, out, total, skipped, progress, refresh, t0, stages_to
     return computed, failed
 
 
-def _eta(elapsed: float, work: float, planned: float) -> float | None:
-    """Seconds left if the remaining ``planned - work`` stages go at the rate so far.
+def eta_seconds(elapsed: float, done: float, remaining: float) -> float | None:
+    """Seconds left if the ``remaining`` units of work go at the rate of the ``done`` ones
+    (``elapsed`` seconds); None until some work is done. The one ETA of the package: the
+    sweep's :class:`Progress` and :func:`crumple.cli.progress.progress_line` both use it.
 
-    >>> _eta(100.0, 25, 100), _eta(5.0, 0, 10)
+    >>> eta_seconds(100.0, 25, 75), eta_seconds(5.0, 0, 10)
     (300.0, None)
     """
-    if work <= 0:
+    if done <= 0:
         return None
-    return max(0.0, elapsed / work * (planned - work))
+    return max(0.0, elapsed / done * remaining)

@@ -217,7 +217,10 @@ def _manifest(sweep: Sweep) -> dict:
     }
 
 
-def _read_manifest(out: Path) -> dict:
+def _read_manifest(out: Path, *, for_load: bool = False) -> dict:
+    """The manifest of a store, checked (:func:`_check_manifest`); ``for_load``: also the keys
+    that only ``load`` needs (``dims``, ``lambdas``, ``replicas``, ``sweep``, each run's
+    ``index``), which ``status`` can do without."""
     path = Path(out) / MANIFEST
     if not path.is_file():
         raise ValueError(f"{out} is not a sweep store (no {MANIFEST})")
@@ -230,24 +233,73 @@ def _read_manifest(out: Path) -> dict:
     version = m.get("format_version", 0)
     if not isinstance(version, int) or version > MANIFEST_VERSION:
         raise ValueError(f"{path} has format version {version!r}; upgrade crumple")
-    _check_manifest(path, m)
+    _check_manifest(path, m, for_load=for_load)
     return m
 
 
-def _check_manifest(path: Path, m: dict) -> None:
-    """The keys that status and load read, with their types: a hand-edited or truncated
-    manifest is a one-line ValueError here, never a KeyError or AttributeError later."""
+def _is_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _check_manifest(path: Path, m: dict, *, for_load: bool = False) -> None:
+    """The keys that status and load read, with their types and ranges: a hand-edited or
+    truncated manifest is a one-line ValueError here, never a KeyError, TypeError or
+    IndexError later. Keys only ``load`` reads are checked where present, and required with
+    ``for_load``."""
+
+    def bad(what: str) -> ValueError:
+        return ValueError(f"{path} is damaged: {what}")
+
     runs = m.get("runs")
     if not isinstance(runs, list):
-        raise ValueError(f"{path} is damaged: 'runs' is missing or not a list")
+        raise bad("'runs' is missing or not a list")
+    if for_load:
+        for key in ("dims", "lambdas", "replicas", "sweep"):
+            if key not in m:
+                raise bad(f"{key!r} is missing")
+    for key, kind in (("dims", list), ("lambdas", list), ("sweep", dict)):
+        if key in m and not isinstance(m[key], kind):
+            raise bad(f"{key!r} is not a {kind.__name__}")
+    if "replicas" in m and not (_is_int(m["replicas"]) and m["replicas"] >= 1):
+        raise bad(f"'replicas' is not a whole number >= 1 ({m['replicas']!r})")
+    lams = m.get("lambdas", [])
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in lams) or not (
+        np.isfinite(np.asarray(lams, dtype=float)).all()
+    ):
+        raise bad("'lambdas' holds something other than finite numbers")
+    if np.any(np.diff(np.asarray(lams, dtype=float)) <= 0):
+        raise bad("'lambdas' is not increasing")
+    sizes = [_check_dim(bad, i, d) for i, d in enumerate(m.get("dims", []))]
     for i, r in enumerate(runs):
         if not isinstance(r, dict) or not isinstance(r.get("id"), str):
-            raise ValueError(f"{path} is damaged: runs[{i}] has no 'id'")
-        if not isinstance(r.get("replica", 0), int):
-            raise ValueError(f"{path} is damaged: runs[{i}] has a non-integer 'replica'")
-    for key, kind in (("dims", list), ("lambdas", list), ("replicas", int)):
-        if key in m and not isinstance(m[key], kind):
-            raise ValueError(f"{path} is damaged: {key!r} is not a {kind.__name__}")
+            raise bad(f"runs[{i}] has no 'id'")
+        rep = r.get("replica", 0)
+        if not _is_int(rep) or not 0 <= rep < m.get("replicas", rep + 1):
+            raise bad(f"runs[{i}] has a 'replica' that is not an index of the replicas ({rep!r})")
+        if "index" in r or (for_load and "dims" in m):
+            idx = r.get("index")
+            if not (
+                isinstance(idx, list)
+                and len(idx) == len(sizes)
+                and all(_is_int(k) and 0 <= k < n for k, n in zip(idx, sizes, strict=False))
+            ):
+                raise bad(f"runs[{i}] has an 'index' that is not a point of 'dims' ({idx!r})")
+
+
+def _check_dim(bad, i: int, d) -> int:
+    """One entry of ``dims``: ``{"name": str, "values": list[, "levels": list]}``; its size."""
+    if not isinstance(d, dict) or not isinstance(d.get("name"), str):
+        raise bad(f"dims[{i}] has no 'name'")
+    values = d.get("values")
+    if not isinstance(values, list) or not values:
+        raise bad(f"dims[{i}] ({d['name']}) has no list of 'values'")
+    if "levels" in d:
+        levels = d["levels"]
+        if not isinstance(levels, list) or not all(
+            isinstance(v, list) and len(v) == len(levels) for v in values
+        ):
+            raise bad(f"dims[{i}] ({d['name']}): 'values' do not match its 'levels'")
+    return len(values)
 
 
 def _failure(path: Path) -> dict:
