@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import crumple.protocol as protocol
-from crumple.energy import WireEnergy, cavity_energy, energy_terms
+from crumple.energy import WireEnergy, cavity_energy, confinement_energy, energy_terms
 from crumple.geometry import disc_exit_fraction, has_crossings
 from crumple.minimize import resolution
 from crumple.model import Wire
@@ -276,3 +276,22 @@ def test_no_accepted_configuration_leaves_the_cavity_or_crosses(n, rc, lam, seed
         e_prev = e
     assert np.all(np.einsum("ij,ij->i", res.x, res.x) < rc * rc)
     assert energy.terms(res.x).wall > 0  # the wall did hold the wire
+
+
+@pytest.mark.parametrize("lam", [10.0, 1000.0])
+def test_a_trap_outside_presses_the_wire_on_the_wall(lam):
+    """A trap centred outside the cavity pulls the whole wire into the wall: the equilibrium
+    is inside, every node too, and the wall's net reaction balances the trap's net pull
+    (internal forces sum to zero)."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=30, cavity_radius=0.6, trap_center=(3.0, 0.0))
+    x0 = protocol.initial_state(wire, seed=1) - np.asarray(wire.trap_center)
+    r = minimize_wire(wire, x0, lam)
+    assert r.converged, r.message
+    assert np.all(np.einsum("ij,ij->i", r.x, r.x) < 0.36)
+    assert not has_crossings(r.x)
+    energy = WireEnergy(wire, lam)
+    assert energy.terms(r.x).wall > 0
+    _, g_wall = cavity_energy(r.x, 0.6, wire.hard_core, wire.hard_core_energy)
+    _, g_trap = confinement_energy(r.x, lam, energy.weights, wire.trap_center)
+    pull = g_trap.sum(axis=0)
+    np.testing.assert_allclose(g_wall.sum(axis=0), -pull, atol=1e-5 * np.linalg.norm(pull))
