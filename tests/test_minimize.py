@@ -310,6 +310,85 @@ def test_input_validation():
 
 
 # --------------------------------------------------------------------------------------------
+# Fixed degrees of freedom
+# --------------------------------------------------------------------------------------------
+
+
+def bowl(n_rows: int, seed: int):
+    """E = ½ (x - a)ᵀ A (x - a) over x of shape (n_rows, 2), A symmetric positive definite and
+    fully coupled."""
+    rng = np.random.default_rng(seed)
+    q = rng.standard_normal((2 * n_rows, 2 * n_rows))
+    a_mat = q @ q.T + 0.5 * np.eye(2 * n_rows)
+    centre = rng.standard_normal(2 * n_rows)
+
+    def f(x):
+        d = x.ravel() - centre
+        return 0.5 * float(d @ a_mat @ d), (a_mat @ d).reshape(x.shape)
+
+    return f, a_mat, centre
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+@pytest.mark.parametrize("seed", range(3))
+def test_fixed_rows_give_the_constrained_minimum_of_a_bowl(sparse, seed):
+    """Rows fixed at x_c: the minimum of the bowl over the free rows is the solution of
+    A_ff (x_f - a_f) = -A_fc (x_c - a_c); the fixed rows do not move by one bit."""
+    n = 5
+    f, a_mat, centre = bowl(n, seed)
+    x0 = np.random.default_rng(seed + 10).standard_normal((n, 2))
+    fixed = np.zeros(n, dtype=bool)
+    fixed[[0, 3]] = True
+    hess = (lambda x: sp.csc_matrix(a_mat)) if sparse else (lambda x: a_mat)
+    r = newton(f, x0, hess=hess, fixed=fixed, ftol=1e-10)
+    assert r.converged, r.message
+    np.testing.assert_array_equal(r.x[fixed], x0[fixed])
+    c = np.repeat(fixed, 2)
+    coupling = a_mat[np.ix_(~c, c)] @ (x0.ravel()[c] - centre[c])
+    want = centre[~c] - np.linalg.solve(a_mat[np.ix_(~c, ~c)], coupling)
+    np.testing.assert_allclose(r.x.ravel()[~c], want, atol=1e-9)
+    # the force is reported on the free rows only: the fixed rows still carry a reaction
+    g = f(r.x)[1]
+    assert r.max_force == pytest.approx(max_force(g[~fixed]), abs=1e-12)
+    assert max_force(g[fixed]) > 1e-3
+
+
+def test_a_fixed_coordinate_of_a_one_dimensional_problem():
+    def f(x):  # (x0 - 1)² + 10 (x1 + 2)² + x0 x1
+        return (float((x[0] - 1) ** 2 + 10 * (x[1] + 2) ** 2 + x[0] * x[1]),
+                np.array([2 * (x[0] - 1) + x[1], 20 * (x[1] + 2) + x[0]]))  # fmt: skip
+
+    h = np.array([[2.0, 1.0], [1.0, 20.0]])
+    r = newton(f, [3.0, 0.0], hess=lambda x: h, fixed=np.array([True, False]))
+    assert r.converged and r.x[0] == 3.0
+    assert r.x[1] == pytest.approx(-2.0 - 3.0 / 20.0, abs=1e-9)
+
+
+def test_stability_concerns_the_free_rows_only():
+    """A saddle of the full problem whose unstable direction is fixed is a minimum."""
+
+    def f(x):  # x0² - x1²: a saddle, stable in x0
+        return float(x[0] ** 2 - x[1] ** 2), np.array([2 * x[0], -2 * x[1]])
+
+    h = np.diag([2.0, -2.0])
+    r = newton(f, [0.5, 0.0], hess=lambda x: h, fixed=np.array([False, True]))
+    assert r.converged and r.x.tolist() == [0.0, 0.0] and "escape" not in r.message
+
+
+def test_fixed_mask_validation():
+    f, a_mat, _ = bowl(3, 0)
+    x0 = np.zeros((3, 2))
+    with pytest.raises(ValueError, match="boolean"):
+        newton(f, x0, hess=lambda x: a_mat, fixed=[0, 1, 0])
+    with pytest.raises(ValueError, match="shape"):
+        newton(f, x0, hess=lambda x: a_mat, fixed=np.zeros(6, dtype=bool))
+    with pytest.raises(ValueError, match="every row"):
+        newton(f, x0, hess=lambda x: a_mat, fixed=np.ones(3, dtype=bool))
+    r = newton(f, x0, hess=lambda x: a_mat, fixed=np.zeros(3, dtype=bool))
+    assert r.converged
+
+
+# --------------------------------------------------------------------------------------------
 # Newton: the descent invariant as a property
 # --------------------------------------------------------------------------------------------
 

@@ -416,6 +416,28 @@ def test_minimize_wire_input_checks():
         minimize_wire(wire, straight, 1.0, method="fire")
 
 
+@pytest.mark.parametrize("lam", [0.0, 50.0])
+def test_a_clamped_end_stays_clamped(lam):
+    """Two end nodes fixed (a clamped end) in a trap whose centre pulls the wire away: they do
+    not move by one bit, the rest reaches equilibrium, and the clamp carries the reaction."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=20, trap_center=(0.3, 0.2))
+    x0 = initial_state(wire, seed=4) - np.asarray(wire.trap_center)  # the wire off centre
+    x0[:, 1] += 0.05 * np.sin(np.pi * np.linspace(0, 1, wire.n_nodes))  # and bent
+    fixed = np.zeros(wire.n_nodes, dtype=bool)
+    fixed[:2] = True
+    r = minimize_wire(wire, x0, lam, fixed=fixed)
+    assert r.converged, r.message
+    np.testing.assert_array_equal(r.x[:2], x0[:2])
+    assert not has_crossings(r.x)
+    g = WireEnergy(wire, lam)(r.x)[1]
+    assert np.max(np.hypot(*g[2:].T)) <= 1e-6
+    if lam > 0:
+        assert np.max(np.hypot(*g[:2].T)) > 1e-3  # the clamp holds the wire against the trap
+        assert np.max(np.abs(r.x[2:] - x0[2:])) > 0.01
+    with pytest.raises(ValueError, match="newton"):
+        minimize_wire(wire, x0, lam, fixed=fixed, method="powell", rng=np.random.default_rng(0))
+
+
 def test_powell_ramp_on_a_small_wire():
     """The paper's method: slow and short of equilibrium, but typed, crossing-free, never
     above the energy it started each stage from. Its infeasible probes (crossings, energy

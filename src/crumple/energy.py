@@ -19,6 +19,9 @@ Terms (see ``docs/model.md`` for every modelling decision):
     E_{hc} = ε \\sum_{(k, j)} b(D_{kj} / d), \\quad b(u) = (1 - u)^2 / u \\ (u < 1),
              \\ 0 \\ (u \\ge 1)
 
+    E_{wall} = ε \\sum_{i=0}^{N} b(δ_i / d), \\quad δ_i = R_c - |x_i|
+             \\ \\text{(only with a cavity of radius } R_c\\text{)}
+
 where D_kj is the distance from node k to segment j over the pairs of
 :func:`crumple.geometry.node_segment_pairs` (non-adjacent segments), d the hard-core width and
 ε its energy scale. b is zero with zero slope at D = d (so the energy is C1), stiff there
@@ -44,6 +47,7 @@ __all__ = [
     "EnergyTerms",
     "WireEnergy",
     "bending_energy",
+    "cavity_energy",
     "confinement_energy",
     "confinement_weights",
     "energy_terms",
@@ -160,6 +164,27 @@ def _hard_core_eg(pos, ks, js, width, strength, grad):
 
 
 @njit(cache=True)
+def _wall_eg(pos, radius, width, strength, grad):
+    """The cavity's barrier ε Σ b(δ_i/d), δ_i = R_c - |x_i|; nothing when R_c is infinite."""
+    if not math.isfinite(radius):
+        return 0.0
+    e = 0.0
+    for i in range(pos.shape[0]):
+        r = math.sqrt(pos[i, 0] * pos[i, 0] + pos[i, 1] * pos[i, 1])
+        delta = radius - r
+        if delta >= width:
+            continue
+        if delta <= 0.0:
+            return math.inf
+        b, db, _ = _barrier(delta / width)
+        e += strength * b
+        c = -strength * db / (width * r)  # dE/dδ dδ/dx, dδ/dx = -x/r
+        grad[i, 0] += c * pos[i, 0]
+        grad[i, 1] += c * pos[i, 1]
+    return e
+
+
+@njit(cache=True)
 def _max_displacement(x, ref):
     m = 0.0
     for i in range(x.shape[0]):
@@ -170,11 +195,12 @@ def _max_displacement(x, ref):
 
 @njit(cache=True)
 def _total_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, ks, js, width, strength,
-              terms):  # fmt: skip
+              radius, terms):  # fmt: skip
     grad = np.zeros_like(pos)
     _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms)
     terms[3] = _hard_core_eg(pos, ks, js, width, strength, grad)
-    return terms[0] + terms[1] + terms[2] + terms[3], grad
+    terms[4] = _wall_eg(pos, radius, width, strength, grad)
+    return terms[0] + terms[1] + terms[2] + terms[3] + terms[4], grad
 
 
 # --------------------------------------------------------------------------------------------
@@ -222,9 +248,10 @@ def _project_psd(block):
 
 @njit(cache=True)
 def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
-                      project, project_bending=False):  # fmt: skip
+                      project, project_bending=False, radius=math.inf):  # fmt: skip
     n = pos.shape[0]
-    size = 36 * (n - 2) + 16 * (n - 1) + 2 * n + 36 * ks.shape[0]
+    wall = math.isfinite(radius)
+    size = 36 * (n - 2) + 16 * (n - 1) + (6 if wall else 2) * n + 36 * ks.shape[0]
     rows = np.empty(size, dtype=np.int64)
     cols = np.empty(size, dtype=np.int64)
     vals = np.empty(size)
@@ -292,6 +319,27 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
             cols[m] = 2 * i + u
             vals[m] = 2.0 * lam * weights[i]
             m += 1
+    # cavity: ε b''/d² n nᵀ + ε b'/d ∇²δ, with δ = R_c - r, ∇δ = -n, ∇²δ = -(I - n nᵀ)/r, on
+    # each node's own 2 × 2 block (already in the pattern through the stretching blocks);
+    # every node writes its block, zeros when away from the wall, so the pattern is fixed
+    if wall:
+        for i in range(n):
+            r = math.sqrt(pos[i, 0] * pos[i, 0] + pos[i, 1] * pos[i, 1])
+            delta = radius - r
+            c2 = c1 = 0.0
+            if 0.0 < delta < width:
+                _, d1b, d2b = _barrier(delta / width)
+                c2 = strength * d2b / (width * width)
+                c1 = -strength * d1b / (width * r)  # ε b'/d × (-1/r)
+            nx, ny = (pos[i, 0] / r, pos[i, 1] / r) if r > 0.0 else (0.0, 0.0)
+            for u in range(2):
+                nu = nx if u == 0 else ny
+                for v in range(2):
+                    nv = nx if v == 0 else ny
+                    rows[m] = 2 * i + u
+                    cols[m] = 2 * i + v
+                    vals[m] = c2 * nu * nv + c1 * ((1.0 if u == v else 0.0) - nu * nv)
+                    m += 1
     # hard core, exact: ε b''/d² ∇D∇Dᵀ + ε b'/d ∇²D. With n = (p - c)/D the unit normal and t the
     # closest-point parameter on segment (a, b), e = b - a:
     #   interior (0 < t < 1), by the envelope theorem on min_t |p - a - t e|:
@@ -530,18 +578,60 @@ def hard_core_energy(positions, width: float, strength: float = 1.0):
     return float(_hard_core_eg(pos, ks, js, float(width), float(strength), grad)), grad
 
 
+def cavity_energy(positions, radius: float, width: float, strength: float = 1.0):
+    """The wall of a rigid circular cavity centred at the origin, and its gradient.
+
+    .. math::
+
+        E_{wall} = ε \\sum_i b(δ_i / d), \\quad δ_i = R_c - |x_i|,
+        \\quad b(u) = (1 - u)^2 / u \\ (u < 1), \\ 0 \\ (u \\ge 1)
+
+    the hard core's barrier on each node's distance to the wall (``docs/model.md``, "The
+    cavity"). Infinite when a node is on or outside the wall.
+
+    Parameters
+    ----------
+    positions : array_like, shape (n_nodes, 2)
+        ``[length]``
+    radius : float
+        Cavity radius R_c ``[length]``.
+    width : float
+        Barrier width d ``[length]`` (the wire's hard-core width).
+    strength : float
+        Energy scale ε ``[energy]``.
+
+    Examples
+    --------
+    >>> e, g = cavity_energy([[0.0, 0.0], [0.5, 0.0], [0.0, 0.99995]], radius=1.0, width=1e-4)
+    >>> round(e, 12)                  # one node at δ = d/2, b(1/2) = 1/2
+    0.5
+    """
+    pos = _as_positions(positions)
+    grad = np.zeros_like(pos)
+    r = _check_radius(radius)
+    return float(_wall_eg(pos, r, float(width), float(strength), grad)), grad
+
+
+def _check_radius(radius) -> float:
+    r = float(radius)
+    if not (math.isfinite(r) and r > 0):
+        raise ValueError(f"cavity radius must be a positive finite number, got {radius!r}")
+    return r
+
+
 @dataclass(frozen=True, slots=True)
 class EnergyTerms:
-    """Energy of a configuration by term ``[energy]``."""
+    """Energy of a configuration by term ``[energy]``; ``wall`` is the cavity's (0 without)."""
 
     bending: float
     stretching: float
     confinement: float
     hard_core: float
+    wall: float = 0.0
 
     @property
     def total(self) -> float:
-        return self.bending + self.stretching + self.confinement + self.hard_core
+        return self.bending + self.stretching + self.confinement + self.hard_core + self.wall
 
     @property
     def gamma(self) -> float:
@@ -554,6 +644,7 @@ class EnergyTerms:
             "stretching": self.stretching,
             "confinement": self.confinement,
             "hard_core": self.hard_core,
+            "wall": self.wall,
             "total": self.total,
         }
 
@@ -585,7 +676,8 @@ class WireEnergy:
         self.weights = confinement_weights(wire.n_nodes, wire.confinement, wire.length)
         self._s, self._tp = _plastic_args(wire.plasticity)
         self.rest_angles = _rest_angles(rest_angles, wire.n_nodes)
-        self._terms = np.zeros(4)
+        self._terms = np.zeros(5)
+        self._radius = math.inf if wire.cavity_radius is None else wire.cavity_radius
         # Verlet list: candidate pairs within d + skin of a reference configuration stay valid
         # while no node has moved more than skin / 2 from it (a pair's distance changes by at
         # most the sum of its nodes' displacements). Candidates come out in (node, segment)
@@ -610,7 +702,7 @@ class WireEnergy:
             x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
             self.weights,
             w.trap_center[0], w.trap_center[1], ks, js, w.hard_core, w.hard_core_energy,
-            self._terms,
+            self._radius, self._terms,
         )  # fmt: skip
 
     def __call__(self, x):
@@ -645,7 +737,7 @@ class WireEnergy:
         rows, cols, vals = _hessian_triplets(
             x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
             self.weights, ks, js, w.hard_core, w.hard_core_energy, project_contacts,
-            project_bending,
+            project_bending, self._radius,
         )  # fmt: skip
         ndof = x.size
         if dense is None:

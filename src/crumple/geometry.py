@@ -23,6 +23,7 @@ from numba import njit
 
 __all__ = [
     "close_segment_pairs",
+    "disc_exit_fraction",
     "find_crossings",
     "has_crossings",
     "max_safe_fraction",
@@ -677,6 +678,48 @@ def max_safe_fraction(positions, step) -> float:
     if pos.shape[0] < 3:
         return 1.0
     return float(_max_safe_fraction(pos, stp))
+
+
+def disc_exit_fraction(positions, step, radius: float) -> float:
+    """Continuous collision detection against a circle: the largest ``t`` in ``[0, 1]`` such
+    that every node stays strictly inside the disc ``|x| < radius`` (centred at the origin)
+    while the wire moves from ``positions`` to ``positions + t' * step``, ``t' < t``.
+
+    Node i leaves at the positive root of ``|x_i + t p_i|² = radius²`` (one positive root,
+    since the start is inside). The disc is convex, so a segment whose two ends are inside
+    lies inside: testing the nodes is enough. Returns 1.0 when the whole step stays inside.
+
+    Parameters
+    ----------
+    positions, step : array_like, shape (n_nodes, 2)
+        Start configuration (every node inside) and displacement ``[length]``.
+    radius : float
+        Radius of the disc ``[length]``.
+
+    Examples
+    --------
+    >>> round(disc_exit_fraction([[0.5, 0.0]], [[1.0, 0.0]], 1.0), 12)   # reaches x = 1 at t = ½
+    0.5
+    >>> disc_exit_fraction([[0.5, 0.0]], [[-1.0, 0.0]], 1.0)              # inward: whole step
+    1.0
+    """
+    pos = _as_positions(positions)
+    stp = _as_positions(step)
+    if stp.shape != pos.shape:
+        raise ValueError(f"step has shape {stp.shape}, positions {pos.shape}")
+    a = np.einsum("ij,ij->i", stp, stp)
+    b = np.einsum("ij,ij->i", pos, stp)
+    c = np.einsum("ij,ij->i", pos, pos) - float(radius) ** 2  # < 0 inside
+    moving = a > 0
+    if not np.any(moving):
+        return 1.0
+    a, b, c = a[moving], b[moving], c[moving]
+    root = np.sqrt(np.maximum(b * b - a * c, 0.0))
+    # the positive root of a t² + 2 b t + c, written without cancellation
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(b > 0, -c / (b + root), (root - b) / a)
+    t = np.where(c < 0, t, 0.0)  # a node already on or outside the circle: no safe step
+    return float(min(1.0, np.min(t)))
 
 
 # --------------------------------------------------------------------------------------------

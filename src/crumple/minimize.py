@@ -132,6 +132,7 @@ def newton(
     zero_modes: Callable[[np.ndarray], np.ndarray] | None = None,
     max_escapes: int = 20,
     callback: Callable[[int, np.ndarray, float, float], None] | None = None,
+    fixed=None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -204,6 +205,12 @@ def newton(
         Steps along negative curvature allowed before giving up on stability.
     callback : callable, optional
         ``callback(iteration, x, energy, max_force)`` after every accepted step.
+    fixed : array_like of bool, shape (n,), optional
+        Rows of ``x`` held at their starting values (prescribed degrees of freedom). Their
+        gradient entries are set to zero and their Hessian rows and columns replaced by the
+        identity, so every step is exactly zero there; the largest force, the reported
+        ``max_force``, the stability test and the escapes concern the free rows only. Zero
+        modes are the caller's: give only those of the constrained problem.
 
     Returns
     -------
@@ -223,12 +230,15 @@ def newton(
     if not (math.isfinite(curvature_tol) and curvature_tol > 0):
         raise ValueError(f"curvature_tol must be positive, got {curvature_tol}")
     m = _metric(metric, x)
+    mask = _fixed_mask(fixed, x)
+    if mask is not None:
+        fun, hess, hess_fallback = _constrained(mask, fun, hess, hess_fallback)
     if feasible is not None and not feasible(x):
         raise ValueError("the starting point is not feasible")
     e, g = fun(x)
     if not math.isfinite(e):
         raise ValueError(f"the energy at the starting point is {e}")
-    st = _State(x=x, e=float(e), g=g, fmax=max_force(g))
+    st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
     st.radius = math.inf if max_step is None else float(max_step)
     ldl = LDLT()
     floor = curvature_tol * m
@@ -268,6 +278,8 @@ def newton(
             break
         st.it += 1
         p = _direction(st, hess, hess_fallback, ldl, floor, m)
+        if mask is not None:  # zero already in exact arithmetic; made exact in floating point
+            p.reshape(-1)[mask] = 0.0
         if not np.all(np.isfinite(p)):
             message = "could not make the Hessian positive definite (non-finite factor)"
             break
@@ -295,6 +307,55 @@ def newton(
     )
 
 
+def _fixed_mask(fixed, x):
+    """The fixed rows as a boolean mask over ``x.ravel()``, or None when nothing is fixed."""
+    if fixed is None:
+        return None
+    f = np.asarray(fixed)
+    if f.dtype != np.bool_ or f.shape != x.shape[:1]:
+        raise ValueError(f"fixed must be a boolean array of shape {x.shape[:1]}, got {f.dtype} "
+                         f"{f.shape}")  # fmt: skip
+    if not f.any():
+        return None
+    if f.all():
+        raise ValueError("every row is fixed: nothing to minimise")
+    return np.repeat(f, x.shape[1]) if x.ndim == 2 else f.copy()
+
+
+def _constrained(mask, fun, hess, hess_fallback):
+    """``fun`` and the Hessians with the fixed entries removed: zero gradient there, and the
+    identity in their rows and columns of the Hessian (same sparsity pattern where the
+    diagonal is stored, so a symbolic analysis is still reused)."""
+
+    def cfun(x):
+        e, g = fun(x)
+        g = np.array(g, dtype=np.float64)
+        g.reshape(-1)[mask] = 0.0
+        return e, g
+
+    def chess(h):
+        if sp.issparse(h):
+            h = h.tocsc()
+            col = np.repeat(np.arange(h.shape[1]), np.diff(h.indptr))
+            row = h.indices
+            if np.count_nonzero(mask[row] & (row == col)) == np.count_nonzero(mask):
+                # same index arrays (not copies): the factorisation sees the same pattern
+                data = h.data.copy()
+                touched = mask[row] | mask[col]
+                data[touched] = np.where(row[touched] == col[touched], 1.0, 0.0)
+                return sp.csc_matrix((data, h.indices, h.indptr), shape=h.shape, copy=False)
+            keep = sp.diags((~mask).astype(np.float64))
+            return (keep @ h @ keep + sp.diags(mask.astype(np.float64))).tocsc()
+        h = np.array(h, dtype=np.float64)
+        h[mask, :] = 0.0
+        h[:, mask] = 0.0
+        h[mask, mask] = 1.0
+        return h
+
+    fallback = None if hess_fallback is None else (lambda x: chess(hess_fallback(x)))
+    return cfun, (lambda x: chess(hess(x))), fallback
+
+
 @dataclass(slots=True)
 class _State:
     """The iterate and the bookkeeping of :func:`newton`."""
@@ -311,6 +372,7 @@ class _State:
     skip: int = 0
     skip_left: int = 0
     sigma: float = 0.0
+    mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
@@ -496,10 +558,14 @@ def _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible) -> bo
         mu, v = _lowest_mode(h, m, ldl, check, floor, modes)
     if v is None or not mu < 0:
         return False
-    d = v.reshape(st.x.shape)
+    d = v.reshape(st.x.shape).copy()
+    if st.mask is not None:
+        d.reshape(-1)[st.mask] = 0.0
     if float(np.vdot(st.g, d)) > 0:
         d = -d
     biggest = float(np.max(_row_norms(d)))
+    if not biggest > 0:
+        return False
     length = st.radius if math.isfinite(st.radius) else 1e-3 * (1.0 + float(np.max(np.abs(st.x))))
     d = d * (length / biggest)
     if step_limit is not None:

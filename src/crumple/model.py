@@ -110,6 +110,10 @@ class Wire:
         joint, so that E_b = Σ f(θ_i - θ⁰_i). Each replica of a ramp draws its own θ⁰ from
         its seed (quenched disorder, like the residual curvature of a real wire). Default 0:
         the paper's perfectly straight wire.
+    cavity_radius : float or None
+        Radius R_c ``[length]`` of a rigid circular cavity centred at the origin that holds
+        every node (a barrier of the hard core's kind on the node-to-wall distance, within
+        the same width d; ``docs/model.md``, "The cavity"). Default None: no cavity.
 
     Examples
     --------
@@ -132,6 +136,7 @@ class Wire:
     plasticity: Plasticity | None = None
     trap_center: tuple[float, float] = field(default=(0.0, 0.0))
     rest_angle_sd: float = 0.0
+    cavity_radius: float | None = None
 
     def __post_init__(self):
         for name in ("k_b", "k_s", "length", "hard_core", "hard_core_energy"):
@@ -154,6 +159,13 @@ class Wire:
         if not (math.isfinite(sd) and sd >= 0):
             raise ValueError(f"rest_angle_sd must be >= 0, got {self.rest_angle_sd!r}")
         object.__setattr__(self, "rest_angle_sd", sd)
+        if self.cavity_radius is not None:
+            r = _check_positive("cavity_radius", self.cavity_radius)
+            if r <= self.hard_core:
+                raise ValueError(
+                    f"cavity_radius {r} must exceed the hard-core width {self.hard_core}"
+                )
+            object.__setattr__(self, "cavity_radius", r)
         if self.hard_core >= self.rest_length:
             raise ValueError(
                 f"hard_core width {self.hard_core} must be smaller than the segment length "

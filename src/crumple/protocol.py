@@ -29,7 +29,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from .energy import EnergyTerms, WireEnergy, confinement_weights
-from .geometry import has_crossings, max_safe_fraction
+from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
 from .minimize import MinimizeResult, newton, powell
 from .model import Wire
 
@@ -283,13 +283,16 @@ def minimize_wire(
     max_step: float = 0.5,
     rng: np.random.Generator | None = None,
     rest_angles=None,
+    fixed=None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
     Newton: every step is limited by continuous collision detection
     (:func:`crumple.geometry.max_safe_fraction`) and every accepted configuration is checked
     by the exact crossing test, so the wire cannot pass through itself. Powell: crossing
-    configurations get energy +inf.
+    configurations get energy +inf. With a cavity (``wire.cavity_radius``) the steps are also
+    limited so that no node reaches the wall (:func:`crumple.geometry.disc_exit_fraction`), and
+    a configuration with a node on or outside it is never accepted.
 
     Parameters
     ----------
@@ -308,6 +311,9 @@ def minimize_wire(
         Powell's random directions (required for Powell).
     rest_angles : array_like, shape (wire.n_nodes - 2,), optional
         Rest turning angles of an imperfect wire (see ``Wire.rest_angle_sd``).
+    fixed : array_like of bool, shape (wire.n_nodes,), optional
+        Nodes held at their starting positions (Newton only): a clamped end is its two end
+        nodes. With any node fixed, no rigid motion is a zero mode.
 
     Examples
     --------
@@ -322,9 +328,24 @@ def minimize_wire(
         raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
     if has_crossings(x0):
         raise ValueError("the starting configuration crosses itself")
+    radius = wire.cavity_radius
+    if radius is not None and not _inside(x0, radius):
+        worst = float(np.max(np.hypot(*x0.T)))
+        raise ValueError(
+            f"the starting configuration leaves the cavity: a node at |x| = {worst:.6g} >= "
+            f"cavity_radius {radius:.6g}"
+        )
+    free_rotation = True
+    if fixed is not None:
+        fixed = np.asarray(fixed)
+        if fixed.dtype != np.bool_ or fixed.shape != (wire.n_nodes,):
+            raise ValueError(f"fixed must be a boolean array of shape ({wire.n_nodes},)")
+        if method != "newton":
+            raise ValueError("fixed nodes need method='newton'")
+        free_rotation = not fixed.any()
 
     def feasible(x):
-        return not has_crossings(x)
+        return (radius is None or _inside(x, radius)) and not has_crossings(x)
 
     if method == "newton":
         return newton(
@@ -337,11 +358,12 @@ def minimize_wire(
             ftol=ftol,
             maxiter=maxiter,
             max_step=max_step,
-            step_limit=max_safe_fraction,
+            step_limit=_step_limit(radius),
             feasible=feasible,
             curvature_tol=STABILITY_TOL,
             metric=node_lengths(wire),
-            zero_modes=lambda x: _symmetry_modes(x, wire.trap_center, lam),
+            zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
+            fixed=fixed,
         )
     if method == "powell":
         if rng is None:
@@ -365,12 +387,36 @@ def node_lengths(wire: Wire) -> np.ndarray:
     return confinement_weights(wire.n_nodes, "per-length", wire.length)
 
 
-def _symmetry_modes(x, center, lam):
+def _inside(x, radius) -> bool:
+    """Every node strictly inside the cavity (the exact test of an accepted configuration)."""
+    return bool(np.all(np.einsum("ij,ij->i", x, x) < radius * radius))
+
+
+def _step_limit(radius):
+    """The safe fraction of a step: no node-segment contact, and no node reaching the wall.
+
+    Testing the nodes against the wall is enough: the disc is convex, so a segment whose ends
+    are inside lies inside."""
+    if radius is None:
+        return max_safe_fraction
+
+    def limit(x, p):
+        return min(max_safe_fraction(x, p), disc_exit_fraction(x, p, radius))
+
+    return limit
+
+
+def _symmetry_modes(x, wire, lam):
     """Rigid motions that leave the energy unchanged: the rotation about the trap's centre
-    (the trap is isotropic), and the two translations when there is no trap."""
-    r = x - np.asarray(center)
+    (the trap is isotropic), and the two translations when there is no trap. A cavity
+    (centred at the origin) allows no translation, and the rotation only about the origin."""
+    center = np.asarray(wire.trap_center)
+    cavity = wire.cavity_radius is not None
+    if cavity and lam != 0 and np.any(center != 0):
+        return np.zeros((0, x.size))
+    r = x - (0.0 if cavity else center)
     modes = [np.column_stack([-r[:, 1], r[:, 0]]).ravel()]
-    if lam == 0:
+    if lam == 0 and not cavity:
         modes += [np.tile([1.0, 0.0], len(x)), np.tile([0.0, 1.0], len(x))]
     return np.array(modes)
 
@@ -428,7 +474,7 @@ def _run_ramp(wire, ramp, rng, progress):
     for i, lam in enumerate(ramp.lambdas):
         if ramp.stage_noise > 0:
             kick = ramp.stage_noise * wire.rest_length * rng.standard_normal(x.shape)
-            safe = max_safe_fraction(x, kick)
+            safe = _step_limit(wire.cavity_radius)(x, kick)
             x = x + (kick if safe >= 1.0 else 0.5 * safe * kick)
         res = minimize_wire(
             wire,

@@ -12,7 +12,8 @@ dataset                               shape              meaning
 ``n_stages``                          (R,)               stages actually run
 ``seconds``                           (R,)               wall time of each replica
 ``energy/<term>``                     (R, S)             bending, stretching, confinement,
-                                                         hard_core, total [energy]
+                                                         hard_core, total [energy]; and
+                                                         wall, only for a wire with a cavity
 ``solver/converged``                  (R, S)             equilibrium reached (max force <= ftol)
 ``solver/max_force``                  (R, S)             largest node force at the end
 ``solver/<count>``                    (R, S)             ``iterations``, ``evaluations``,
@@ -141,7 +142,9 @@ def save_ramps(
     path = Path(path)
     n_rep, n_stage, n_node = len(results), len(ramp.lambdas), wire.n_nodes
     pos = np.full((n_rep, n_stage, n_node, 2), np.nan)
-    energy = {t: np.full((n_rep, n_stage), np.nan) for t in _TERMS}
+    # the cavity's wall energy only for a wire with a cavity: files without one keep the layout
+    terms = (*_TERMS, "wall") if wire.cavity_radius is not None else _TERMS
+    energy = {t: np.full((n_rep, n_stage), np.nan) for t in terms}
     conv = np.zeros((n_rep, n_stage), dtype=bool)
     fmax = np.full((n_rep, n_stage), np.nan)
     counts = {c: np.zeros((n_rep, n_stage), dtype=np.int64) for c in _COUNTS}
@@ -149,8 +152,9 @@ def save_ramps(
     for r, res in enumerate(results):
         for s, st in enumerate(res.stages):
             pos[r, s] = st.positions
-            for t, v in st.energy.to_dict().items():
-                energy[t][r, s] = v
+            d = st.energy.to_dict()
+            for t in terms:
+                energy[t][r, s] = d[t]
             conv[r, s] = st.result.converged
             fmax[r, s] = st.result.max_force
             for c in _COUNTS:
@@ -388,6 +392,8 @@ def load_ramps(path) -> list[RampResult]:
         n_stages = f["n_stages"][()]
         seconds = f["seconds"][()]
         energy = {t: f["energy"][t][()] for t in _TERMS}
+        if "wall" in f["energy"]:
+            energy["wall"] = f["energy"]["wall"][()]
         solver = f["solver"]
         conv = solver["converged"][()]
         fmax = solver["max_force"][()]
@@ -398,7 +404,10 @@ def load_ramps(path) -> list[RampResult]:
     for r in range(pos.shape[0]):
         stages = []
         for s in range(int(n_stages[r])):
-            terms = EnergyTerms(*(float(energy[t][r, s]) for t in _TERMS[:4]))
+            terms = EnergyTerms(
+                *(float(energy[t][r, s]) for t in _TERMS[:4]),
+                wall=float(energy["wall"][r, s]) if "wall" in energy else 0.0,
+            )
             res = MinimizeResult(
                 x=pos[r, s],
                 energy=float(energy["total"][r, s]),
