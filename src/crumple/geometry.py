@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "as_positions",
     "close_segment_pairs",
     "disc_exit_fraction",
     "find_crossings",
@@ -43,6 +44,25 @@ _CCW_ERRBOUND = (3.0 + 16.0 * _EPS) * _EPS
 # --------------------------------------------------------------------------------------------
 # Spatial hash of axis-aligned boxes
 # --------------------------------------------------------------------------------------------
+
+
+def as_positions(positions, *, min_nodes: int = 2) -> np.ndarray:
+    """``positions`` as a finite float array of shape (n_nodes, 2), ``n_nodes >= min_nodes``.
+
+    Raises ValueError with a message naming what is wrong (not numbers, wrong shape, too few
+    nodes, NaN or infinite values): the one input check of every function of positions.
+    """
+    try:
+        pos = np.asarray(positions, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"positions must be an array of numbers, got {positions!r}") from err
+    if pos.ndim != 2 or pos.shape[1] != 2:
+        raise ValueError(f"positions must have shape (n_nodes, 2), got {pos.shape}")
+    if pos.shape[0] < min_nodes:
+        raise ValueError(f"a wire needs at least {min_nodes} nodes, got {pos.shape[0]}")
+    if not np.all(np.isfinite(pos)):
+        raise ValueError("positions contain NaN or infinite values")
+    return pos
 
 
 @njit(cache=True)

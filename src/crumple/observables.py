@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from crumple.fit import MeanEstimate, PowerLawFit, fit_power_law, mean_confidence_interval
-from crumple.geometry import close_segment_pairs, find_crossings
+from crumple.geometry import as_positions, close_segment_pairs, find_crossings
 from crumple.loops import LoopStats, loops, positive_length
 
 __all__ = [
@@ -57,22 +57,8 @@ _RG_CHOICES = ("r_max", "rms")
 
 
 # --------------------------------------------------------------------------------------------
-# Input checks
+# Input checks (positions: crumple.geometry.as_positions)
 # --------------------------------------------------------------------------------------------
-
-
-def _positions(positions, *, min_nodes: int = 2) -> np.ndarray:
-    try:
-        pos = np.asarray(positions, dtype=float)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"positions must be an array of numbers, got {positions!r}") from err
-    if pos.ndim != 2 or pos.shape[1] != 2:
-        raise ValueError(f"positions must have shape (n_nodes, 2), got {pos.shape}")
-    if pos.shape[0] < min_nodes:
-        raise ValueError(f"a wire needs at least {min_nodes} nodes, got {pos.shape[0]}")
-    if not np.all(np.isfinite(pos)):
-        raise ValueError("positions contain NaN or infinite values")
-    return pos
 
 
 def _segments(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -158,7 +144,7 @@ def center_of_mass(positions, *, weighting: str = "length") -> np.ndarray:
     >>> center_of_mass([[0, 0], [1, 0], [1, 3]], weighting="nodes").round(4).tolist()
     [0.6667, 1.0]
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     if weighting == "nodes":
         return pos.mean(axis=0)
     _, lengths = _segments(pos)
@@ -192,7 +178,7 @@ def r_max(positions, center=None) -> float:
     >>> r_max([[0, 0], [3, 4]], center=[0, 0])
     5.0
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     c = _center(pos, center)
     return float(np.max(np.hypot(*(pos - c).T)))
 
@@ -233,7 +219,7 @@ def radius_of_gyration(positions, center=None, *, weighting: str = "length") -> 
     >>> round(radius_of_gyration(np.c_[np.cos(phi), np.sin(phi)]), 6)    # polygon ~ circle
     0.999999
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     _, lengths = _segments(pos)
     w = _weights(lengths, weighting)
     rel = pos - _center(pos, center, weighting)
@@ -270,7 +256,7 @@ def count_contacts(positions, distance: float) -> int:
     >>> count_contacts(hairpin, 0.2), count_contacts(hairpin, 0.05)
     (1, 0)
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     dist = positive_length("distance", distance)
     pairs, _ = close_segment_pairs(pos, dist)
     return int(pairs.shape[0])
@@ -370,7 +356,7 @@ def mass_within(
     ...     method="eq3")
     (0.4, 0.0)
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     if method not in ("exact", "eq3"):
         raise ValueError(f"method must be 'exact' or 'eq3', got {method!r}")
     d, lengths = _segments(pos)
@@ -489,7 +475,7 @@ def mass_size_exponent(
     >>> round(fit.exponent, 10), fit.fit_range, fit.n_points
     (1.0, (0.5, 1.0), 50)
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     rg = _rg_choice(rg)
     lo, hi = _fit_range(fit_range)
     if not isinstance(n_radii, int | np.integer) or n_radii < 3:
@@ -702,7 +688,7 @@ def measure(
     >>> json.loads(json.dumps(out)) == out
     True
     """
-    pos = _positions(positions)
+    pos = as_positions(positions)
     _segments(pos)
     rg = _rg_choice(rg)
     lo, hi = _fit_range(fit_range)

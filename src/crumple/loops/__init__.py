@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from crumple.geometry import find_crossings
+from crumple.geometry import as_positions, find_crossings
 
 from .faces import faces
 from .links import contact_links
@@ -130,14 +130,7 @@ def loops(
 
 def _clean_positions(positions) -> np.ndarray:
     """Positions as a finite (n, 2) float array, consecutive duplicate nodes merged."""
-    try:
-        pos = np.asarray(positions, dtype=float)
-    except (TypeError, ValueError) as err:
-        raise ValueError(f"positions must be an array of numbers, got {positions!r}") from err
-    if pos.ndim != 2 or pos.shape[1] != 2:
-        raise ValueError(f"positions must have shape (n_nodes, 2), got {pos.shape}")
-    if not np.all(np.isfinite(pos)):
-        raise ValueError("positions contain NaN or infinite values")
+    pos = as_positions(positions, min_nodes=0)
     if pos.shape[0] >= 2:
         keep = np.r_[True, np.any(np.diff(pos, axis=0) != 0.0, axis=1)]
         pos = np.ascontiguousarray(pos[keep])
