@@ -295,3 +295,38 @@ def test_a_trap_outside_presses_the_wire_on_the_wall(lam):
     _, g_trap = confinement_energy(r.x, lam, energy.weights, wire.trap_center)
     pull = g_trap.sum(axis=0)
     np.testing.assert_allclose(g_wall.sum(axis=0), -pull, atol=1e-5 * np.linalg.norm(pull))
+
+
+def test_the_wall_energy_reaches_energies_and_load(tmp_path):
+    """A cavity's wall term is in RampResult.energies() and in crumple.load (E_wall), and a
+    store without a cavity has no E_wall variable."""
+    import json
+
+    from crumple.sweep import Sweep, load
+    from crumple.sweep.execute import execute_run
+    from crumple.sweep.store import _manifest
+
+    wire = Wire(k_b=5, k_s=5e5, n_segments=20, cavity_radius=0.55)
+    res = run_ramp(wire, Ramp(lambdas=(0.0, 1.0)), seed=2)
+    assert "wall" in res.energies()
+    assert (
+        "wall"
+        not in run_ramp(
+            Wire(k_b=5, k_s=5e5, n_segments=20), Ramp(lambdas=(1.0,)), seed=2
+        ).energies()
+    )
+    for radius, has_wall in ((0.55, True), (None, False)):
+        out = tmp_path / str(radius)
+        (out / "runs").mkdir(parents=True)
+        sweep = Sweep(
+            wire={"k_b": 5, "k_s": 5e5, "n_segments": 20, "cavity_radius": radius},
+            ramp={"lambdas": [0, 1]},
+        )
+        (out / "sweep.json").write_text(json.dumps(_manifest(sweep)))
+        for run in sweep.runs():
+            assert execute_run(run.to_task(), str(out))["status"] == "done"
+        ds = load(out)
+        assert ("E_wall" in ds) is has_wall
+        if has_wall:
+            assert np.all(np.isfinite(ds["E_wall"].values))
+            assert ds["E_wall"].shape == ds["E_total"].shape

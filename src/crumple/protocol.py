@@ -227,8 +227,10 @@ class RampResult:
         return [(s.lam, s.result.message) for s in self.stages if not s.result.converged]
 
     def energies(self) -> dict[str, np.ndarray]:
-        """Energy by term at every stage, arrays of shape (n_stages,)."""
+        """Energy by term at every stage, arrays of shape (n_stages,) (``wall`` with a cavity)."""
         keys = ("bending", "stretching", "confinement", "hard_core", "total")
+        if self.wire.cavity_radius is not None:
+            keys = (*keys, "wall")
         return {k: np.array([s.energy.to_dict()[k] for s in self.stages]) for k in keys}
 
     def at(self, lam: float) -> Stage:

@@ -341,7 +341,8 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
     """The arrays of a verified ramp file, as a dict of NumPy arrays, without building objects.
 
     Keys: ``lambda`` (S,), ``n_stages``, ``seconds`` (R,), ``energy/<term>`` and
-    ``solver/<field>`` (R, S) (``solver/message`` as str), ``observables/<name>`` (R, S) for
+    ``solver/<field>`` (R, S) (``solver/message`` as str; ``energy/wall`` only for a wire with a
+    cavity), ``observables/<name>`` (R, S) for
     each per-stage observable the file holds, ``positions`` (R, S, n, 2) when asked for, and
     ``attrs`` (the root attributes, JSON-decoded), and ``rest_angles`` (R, n - 2) for an
     imperfect wire's file (NaN rows: replicas without). Raises ``ValueError`` for a
@@ -358,6 +359,8 @@ def read_arrays(path, *, positions: bool = False, run_id: str | None = None) -> 
                 out[name] = ds.asstr()[()] if name == "solver/message" else ds[()]
             for name, ds in f.get("observables", {}).items():
                 out[f"observables/{name}"] = ds[()]
+            if "wall" in f["energy"]:  # only a wire with a cavity has a wall term
+                out["energy/wall"] = f["energy"]["wall"][()]
             if "rest_angles" in f:
                 out["rest_angles"] = f["rest_angles"][()]
     except (OSError, KeyError, RuntimeError) as exc:

@@ -38,7 +38,8 @@ def load(path, *, positions: bool = False):
     one dimension, named after its key or ``point`` with one coordinate per key), then
     ``replica`` and ``lam`` (every stage λ of any run; NaN where a run has no such stage).
     Data variables over all of them: ``E_bending``, ``E_stretching``, ``E_confinement``,
-    ``E_hard_core``, ``E_total`` ``[energy]``, ``gamma`` (E_s/E_b), ``converged`` (bool),
+    ``E_hard_core``, ``E_total`` ``[energy]`` (and ``E_wall`` when a run has a cavity),
+    ``gamma`` (E_s/E_b), ``converged`` (bool),
     ``max_force`` ``[energy/length]``, ``iterations``, ``evaluations``,
     ``hessian_evaluations`` (float, NaN where no stage), and every per-stage observable of
     :data:`crumple.stage_observables.OBSERVABLES` (``r_max``, ``radius_of_gyration``,
@@ -189,6 +190,8 @@ def _read_runs(out: Path, m: dict, lam: np.ndarray, run_shape: tuple, positions:
             continue
         for t in _TERMS:
             data[f"E_{t}"][(*at, j)] = a[f"energy/{t}"][0]
+        if "energy/wall" in a:  # a cavity's wall term: a variable only for stores that have one
+            data.setdefault("E_wall", np.full(stage_shape, np.nan))[(*at, j)] = a["energy/wall"][0]
         data["max_force"][(*at, j)] = a["solver/max_force"][0]
         ran = np.arange(len(j)) < int(a["n_stages"][0])
         data["converged"][(*at, j)] = a["solver/converged"][0] & ran
