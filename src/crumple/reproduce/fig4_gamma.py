@@ -42,8 +42,9 @@ FIGURES = {
     "k_b (b), against k_b (c) and k_s (d) at every λ of the fit window (grey in a, b) that "
     "enters ε_b and ε_s. Dashed: the paper's closed form (Eq. 5, in Eq. 1's discrete moduli) "
     "times a prefactor C fitted per curve over the window (the formula leaves it unknown), "
-    "so that its shape compares with the data; black: our pooled exponent (table), red "
-    "dotted: the paper's, both through the data in the window. Straight wires (γ undefined) "
+    "so that its shape compares with the data; black: our pooled fit (table) with its own "
+    "intercept; red dotted: the paper's slope, drawn through the data in the window (the "
+    "paper gives no prefactor). Straight wires (γ undefined) "
     "are left out, which leaves gaps",
 }
 _PAPER_EPS = {"lam": 0.55, "k_b": 2.6, "k_s": -3.3}

@@ -23,8 +23,9 @@ VALUES = tuple(paper.PAPER_VALUES[k] for k in ("collapse", "alpha"))
 _KB, _KS = paper.FIG5_REFERENCE
 FIGURES = {
     "fig5_radius": "Fig. 5: (a) R_g = r_max against λ (replica means) with our pooled α fit "
-    "(black) and the paper's λ^-1/4 (red dotted), both drawn through the data in the fit "
-    f"window; (b) its local exponent d ln R_g / d ln λ between successive stages; (c) the "
+    "(black, with its own intercept) and the paper's λ^-1/4 (red dotted, drawn through the "
+    "data in the fit window: the paper gives no prefactor); (b) its local exponent "
+    f"d ln R_g / d ln λ between successive stages; (c) the "
     f"curves rescaled by (g_ref / k_b k_s)^c with g_ref = k_b k_s of the paper's reference "
     f"point ({_KB:g}, {_KS:g}) and c the fitted collapse exponent; dashed black: a power law "
     "fitted to that reference curve, onto which the others are rescaled. Grey: the α fit "
