@@ -334,12 +334,8 @@ def _intersect_exact(pos: np.ndarray, i: int, j: int) -> bool:
 
 
 def _as_positions(positions) -> np.ndarray:
-    pos = np.ascontiguousarray(positions, dtype=np.float64)
-    if pos.ndim != 2 or pos.shape[1] != 2:
-        raise ValueError(f"positions must have shape (n_nodes, 2), got {pos.shape}")
-    if not np.all(np.isfinite(pos)):
-        raise ValueError("positions contain NaN or infinite values")
-    return pos
+    """:func:`as_positions` (any number of nodes), C-contiguous for the Numba kernels."""
+    return np.ascontiguousarray(as_positions(positions, min_nodes=0))
 
 
 def find_crossings(positions) -> np.ndarray:
