@@ -135,15 +135,7 @@ def _solve(n, lp, li, lx, d, perm, b):
             x[li[p]] -= lx[p] * xi
     for i in range(n):
         x[i] /= d[i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for p in range(lp[i], lp[i + 1]):
-            s -= lx[p] * x[li[p]]
-        x[i] = s
-    out = np.empty(n)
-    for i in range(n):
-        out[perm[i]] = x[i]
-    return out
+    return _back_unpermute(n, lp, li, lx, perm, x, n)
 
 
 @njit(cache=True)
@@ -151,7 +143,13 @@ def _unit_back_solve(n, lp, li, lx, perm, k):
     """Pᵀ L⁻ᵀ e_k (back substitution from row k down)."""
     x = np.zeros(n)
     x[k] = 1.0
-    for i in range(k - 1, -1, -1):
+    return _back_unpermute(n, lp, li, lx, perm, x, k)
+
+
+@njit(cache=True)
+def _back_unpermute(n, lp, li, lx, perm, x, top):
+    """Pᵀ L⁻ᵀ x in place over rows ``top - 1`` down to 0 (rows from ``top`` on are final)."""
+    for i in range(top - 1, -1, -1):
         s = x[i]
         for p in range(lp[i], lp[i + 1]):
             s -= lx[p] * x[li[p]]

@@ -21,20 +21,21 @@ def _find(parent, a):
 
 
 @njit(cache=True)
-def _by_face(face, nf):
-    """The half-edges of each face, CSR: those of face f are ``fh[cnt[f]:cnt[f + 1]]``."""
-    nh = face.shape[0]
-    cnt = np.zeros(nf + 1, dtype=np.int64)
-    for h in range(nh):
-        cnt[face[h] + 1] += 1
-    for f in range(nf):
-        cnt[f + 1] += cnt[f]
-    fh = np.empty(nh, dtype=np.int64)
-    fill = cnt[:nf].copy()
-    for h in range(nh):
-        fh[fill[face[h]]] = h
-        fill[face[h]] += 1
-    return cnt, fh
+def csr_groups(keys, n_groups):
+    """Items grouped by key (a counting sort), CSR: the items of group g, in their order, are
+    ``members[start[g]:start[g + 1]]``; ``keys`` are ints in [0, n_groups)."""
+    n = keys.shape[0]
+    start = np.zeros(n_groups + 1, dtype=np.int64)
+    for h in range(n):
+        start[keys[h] + 1] += 1
+    for g in range(n_groups):
+        start[g + 1] += start[g]
+    members = np.empty(n, dtype=np.int64)
+    fill = start[:n_groups].copy()
+    for h in range(n):
+        members[fill[keys[h]]] = h
+        fill[keys[h]] += 1
+    return start, members
 
 
 @njit(cache=True)
@@ -196,7 +197,7 @@ def loop_depths(face, nf, nxt, is_link, is_loop, is_sliver, vx, vy, org):
     Cost: O(E) for the tracing plus the total size of the holes (the sum of the depths).
     """
     nh = face.shape[0]
-    cnt, fh = _by_face(face, nf)
+    cnt, fh = csr_groups(face, nf)
     root, rcnt, rmem = _contact_runs(face, nf, is_link, is_sliver)
     n_contacts = _contacts_per_loop(face, nf, cnt, fh, is_link, is_loop, is_sliver, root)
     in_s = np.full(nf, -1, dtype=np.int64)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .depths import loop_contacts, loop_depths
+from .depths import csr_groups, loop_contacts, loop_depths
 from .record import LoopStats, _frozen
 
 __all__ = ["faces"]
@@ -25,16 +25,7 @@ def _next_half_edges(org, ang, n_v):
     of u -> v is the half-edge out of v just clockwise of v -> u.
     """
     nh = org.shape[0]
-    start = np.zeros(n_v + 1, dtype=np.int64)
-    for h in range(nh):
-        start[org[h] + 1] += 1
-    for v in range(n_v):
-        start[v + 1] += start[v]
-    order = np.empty(nh, dtype=np.int64)
-    fill = start[:n_v].copy()
-    for h in range(nh):
-        order[fill[org[h]]] = h
-        fill[org[h]] += 1
+    start, order = csr_groups(org, n_v)
     for v in range(n_v):
         for i in range(start[v] + 1, start[v + 1]):
             h = order[i]
