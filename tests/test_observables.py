@@ -238,7 +238,7 @@ def test_blocks_over_radii_agree(monkeypatch):
     wire = random_walk(0, 300)
     radii = np.linspace(0.0, 0.5, 40)
     full = mass_within(wire, radii)
-    monkeypatch.setattr(obs, "_BLOCK", 1000)  # 3 radii at a time
+    monkeypatch.setattr(obs.mass, "_BLOCK", 1000)  # 3 radii at a time
     assert np.array_equal(mass_within(wire, radii), full)
 
 
