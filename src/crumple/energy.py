@@ -48,7 +48,8 @@ from .energy_kernels import (
     _total_eg,
     _wall_eg,
 )
-from .geometry import _as_positions, _node_segment_pairs
+from .geometry._input import _as_positions
+from .geometry.distance import _node_segment_pairs
 from .model import Plasticity, Wire
 
 __all__ = [

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .geometry import _point_segment
+from .geometry.distance import _point_segment
 
 # --------------------------------------------------------------------------------------------
 # Kernels: energy and gradient

@@ -14,14 +14,9 @@ import math
 import numpy as np
 from numba import njit
 
-from crumple.geometry import (
-    _build_hash,
-    _cell,
-    _cell_hash,
-    _cell_size,
-    _orient,
-    node_segment_pairs,
-)
+from crumple.geometry import node_segment_pairs
+from crumple.geometry.cells import _build_hash, _cell, _cell_hash, _cell_size
+from crumple.geometry.crossings import _orient
 
 __all__ = ["contact_links"]
 

@@ -1,0 +1,208 @@
+"""Exact segment intersection: Shewchuk's static bound, then rational arithmetic."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+from numba import njit
+
+from ._input import _as_positions
+from .cells import _box_pairs, _segment_boxes
+
+# Shewchuk's bound for orient2d: a float determinant larger than this (times the sum of the
+# magnitudes of its two products) has the right sign. eps = 2**-53 is the unit round-off.
+_EPS = 2.0**-53
+_CCW_ERRBOUND = (3.0 + 16.0 * _EPS) * _EPS
+
+
+# --------------------------------------------------------------------------------------------
+# Exact segment intersection
+# --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _orient(ax, ay, bx, by, cx, cy):
+    """Sign of the cross product (b - a) x (c - a), and whether that sign is certain."""
+    l1, l2 = ax - cx, by - cy
+    r1, r2 = ay - cy, bx - cx
+    detleft = l1 * l2
+    detright = r1 * r2
+    # exactly zero only if a factor is: two distinct floats never differ by exactly 0 (gradual
+    # underflow), but a product of tiny factors can underflow to 0
+    if (l1 == 0.0 or l2 == 0.0) and (r1 == 0.0 or r2 == 0.0):
+        return 0, True
+    detsum = abs(detleft) + abs(detright)
+    if detsum < 1e-280:  # near underflow Shewchuk's bound does not hold: decide exactly
+        return 0, False
+    det = detleft - detright
+    bound = _CCW_ERRBOUND * detsum
+    if det > bound:
+        return 1, True
+    if -det > bound:
+        return -1, True
+    return 0, False
+
+
+@njit(cache=True)
+def _within(a, b, c):
+    # c lies in the closed interval spanned by a and b (exact: comparisons only)
+    return min(a, b) <= c <= max(a, b)
+
+
+@njit(cache=True)
+def _decide(o1, o2, o3, o4, p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y):
+    """Closed segments p1p2 and q1q2 intersect, given exact orientation signs.
+
+    o1 = orient(p1, p2, q1), o2 = orient(p1, p2, q2), o3 = orient(q1, q2, p1),
+    o4 = orient(q1, q2, p2).
+    """
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        return True
+    if o1 == 0 and _within(p1x, p2x, q1x) and _within(p1y, p2y, q1y):
+        return True
+    if o2 == 0 and _within(p1x, p2x, q2x) and _within(p1y, p2y, q2y):
+        return True
+    if o3 == 0 and _within(q1x, q2x, p1x) and _within(q1y, q2y, p1y):
+        return True
+    if o4 == 0 and _within(q1x, q2x, p2x) and _within(q1y, q2y, p2y):
+        return True
+    return False
+
+
+@njit(cache=True)
+def _intersect(pos, i, j):
+    """(intersects, certain) for segments i and j (non-adjacent)."""
+    p1x, p1y, p2x, p2y = pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1]
+    q1x, q1y, q2x, q2y = pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
+    o1, c1 = _orient(p1x, p1y, p2x, p2y, q1x, q1y)
+    o2, c2 = _orient(p1x, p1y, p2x, p2y, q2x, q2y)
+    o3, c3 = _orient(q1x, q1y, q2x, q2y, p1x, p1y)
+    o4, c4 = _orient(q1x, q1y, q2x, q2y, p2x, p2y)
+    if not (c1 and c2 and c3 and c4):
+        return False, False
+    return _decide(o1, o2, o3, o4, p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y), True
+
+
+@njit(cache=True)
+def _fold_back(pos, i):
+    """(overlap, certain) for adjacent segments i, i + 1 folded exactly onto each other."""
+    o, c = _orient(pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1], pos[i + 2, 0], pos[i + 2, 1])
+    if not c:
+        return False, False
+    if o != 0:
+        return False, True
+    ux, uy = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
+    vx, vy = pos[i + 2, 0] - pos[i + 1, 0], pos[i + 2, 1] - pos[i + 1, 1]
+    dot = ux * vx + uy * vy
+    if dot < 0.0:
+        return True, abs(dot) > 4.0 * _EPS * (abs(ux * vx) + abs(uy * vy))
+    return False, dot > 4.0 * _EPS * (abs(ux * vx) + abs(uy * vy))
+
+
+@njit(cache=True)
+def _crossing_candidates(pos, stop_at_first):
+    """Certain crossings and uncertain pairs (to be decided exactly), as index pairs."""
+    lox, loy, hix, hiy = _segment_boxes(pos, 0.0)
+    pairs = _box_pairs(lox, loy, hix, hiy, 1)
+    hits = np.empty((pairs.shape[0], 2), dtype=np.int64)
+    unsure = np.empty((pairs.shape[0], 2), dtype=np.int64)
+    nh = 0
+    nu = 0
+    for k in range(pairs.shape[0]):
+        i, j = pairs[k, 0], pairs[k, 1]
+        if j == i + 1:
+            hit, certain = _fold_back(pos, i)
+        else:
+            hit, certain = _intersect(pos, i, j)
+        if not certain:
+            unsure[nu, 0] = i
+            unsure[nu, 1] = j
+            nu += 1
+        elif hit:
+            hits[nh, 0] = i
+            hits[nh, 1] = j
+            nh += 1
+            if stop_at_first:
+                break
+    return hits[:nh], unsure[:nu]
+
+
+def _orient_exact(a, b, c):
+    ax, ay, bx, by, cx, cy = (Fraction(float(v)) for v in (*a, *b, *c))
+    det = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    return (det > 0) - (det < 0)
+
+
+def _intersect_exact(pos: np.ndarray, i: int, j: int) -> bool:
+    p1, p2, q1, q2 = pos[i], pos[i + 1], pos[j], pos[j + 1]
+    if j == i + 1:  # adjacent: overlap only when folded back exactly along the same line
+        if _orient_exact(p1, p2, q2) != 0:
+            return False
+        u, v = p2 - p1, q2 - q1
+        return (
+            Fraction(float(u[0])) * Fraction(float(v[0]))
+            + Fraction(float(u[1])) * Fraction(float(v[1]))
+            < 0
+        )
+    o = (
+        _orient_exact(p1, p2, q1),
+        _orient_exact(p1, p2, q2),
+        _orient_exact(q1, q2, p1),
+        _orient_exact(q1, q2, p2),
+    )
+    return bool(_decide.py_func(*o, *p1, *p2, *q1, *q2))
+
+
+def find_crossings(positions) -> np.ndarray:
+    """All pairs of segments of a wire that intersect, exactly.
+
+    Segments are closed: touching counts as intersecting. Two non-adjacent segments
+    (``j >= i + 2``) intersect when they share any point; two adjacent segments (``j == i + 1``)
+    are reported only when folded back exactly onto each other (turning angle of π). Expected
+    cost O(n) (spatial hash); orientation signs are certified by Shewchuk's error bound and the
+    few uncertain ones recomputed in exact rational arithmetic.
+
+    Parameters
+    ----------
+    positions : array_like, shape (n_nodes, 2)
+        Node coordinates ``[length]``.
+
+    Returns
+    -------
+    ndarray of int, shape (n_crossings, 2)
+        Segment index pairs ``(i, j)`` with ``i < j``, sorted.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.array([[0, 0], [1, 0], [1, 1], [0.5, -1]])   # the third segment cuts the first
+    >>> find_crossings(z).tolist()
+    [[0, 2]]
+    >>> find_crossings([[0, 0], [1, 0], [2, 0]]).shape
+    (0, 2)
+    """
+    pos = _as_positions(positions)
+    if pos.shape[0] < 3:
+        return np.empty((0, 2), dtype=np.int64)
+    hits, unsure = _crossing_candidates(pos, False)
+    extra = [(int(i), int(j)) for i, j in unsure if _intersect_exact(pos, int(i), int(j))]
+    if extra:
+        hits = np.concatenate([hits, np.array(extra, dtype=np.int64)])
+    order = np.lexsort((hits[:, 1], hits[:, 0]))
+    return hits[order]
+
+
+def has_crossings(positions) -> bool:
+    """Whether any two segments intersect (see :func:`find_crossings`); stops at the first.
+
+    >>> has_crossings([[0, 0], [1, 0], [1, 1], [0.5, -1]])
+    True
+    """
+    pos = _as_positions(positions)
+    if pos.shape[0] < 3:
+        return False
+    hits, unsure = _crossing_candidates(pos, True)
+    if hits.shape[0]:
+        return True
+    return any(_intersect_exact(pos, int(i), int(j)) for i, j in unsure)

@@ -1,0 +1,238 @@
+"""Distances between points and segments, close pairs, lengths and turning angles."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._input import _as_positions
+from .cells import _box_pairs, _build_hash, _cell, _cell_hash, _cell_size, _segment_boxes
+from .crossings import _intersect
+
+# --------------------------------------------------------------------------------------------
+# Distances
+# --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _point_segment(px, py, ax, ay, bx, by):
+    """Distance from p to segment ab, the closest point's parameter t in [0, 1], and p - c."""
+    ex, ey = bx - ax, by - ay
+    ee = ex * ex + ey * ey
+    t = 0.0
+    if ee > 0.0:
+        t = ((px - ax) * ex + (py - ay) * ey) / ee
+        t = min(1.0, max(0.0, t))
+    vx = px - (ax + t * ex)
+    vy = py - (ay + t * ey)
+    return np.sqrt(vx * vx + vy * vy), t, vx, vy
+
+
+@njit(cache=True)
+def _segment_segment(pos, i, j):
+    p1x, p1y, p2x, p2y = pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1]
+    q1x, q1y, q2x, q2y = pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
+    hit, certain = _intersect(pos, i, j)
+    if hit or not certain:
+        # "not certain" means within round-off of touching: the distance is zero to
+        # working precision either way
+        return 0.0
+    d = _point_segment(p1x, p1y, q1x, q1y, q2x, q2y)[0]
+    d = min(d, _point_segment(p2x, p2y, q1x, q1y, q2x, q2y)[0])
+    d = min(d, _point_segment(q1x, q1y, p1x, p1y, p2x, p2y)[0])
+    d = min(d, _point_segment(q2x, q2y, p1x, p1y, p2x, p2y)[0])
+    return d
+
+
+@njit(cache=True)
+def _close_pairs(pos, cutoff):
+    lox, loy, hix, hiy = _segment_boxes(pos, 0.5 * cutoff)
+    pairs = _box_pairs(lox, loy, hix, hiy, 2)
+    keep = np.empty(pairs.shape[0], dtype=np.bool_)
+    dist = np.empty(pairs.shape[0])
+    for k in range(pairs.shape[0]):
+        dist[k] = _segment_segment(pos, pairs[k, 0], pairs[k, 1])
+        keep[k] = dist[k] < cutoff
+    return pairs[keep], dist[keep]
+
+
+def close_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of non-adjacent segments closer than ``cutoff``, with their distances.
+
+    Non-adjacent means ``j >= i + 2``. Crossing segments have distance 0.
+
+    Parameters
+    ----------
+    positions : array_like, shape (n_nodes, 2)
+        Node coordinates ``[length]``.
+    cutoff : float
+        Distance ``[length]``, > 0.
+
+    Returns
+    -------
+    pairs : ndarray of int, shape (n_pairs, 2)
+        ``(i, j)`` with ``j >= i + 2``, sorted.
+    distances : ndarray, shape (n_pairs,)
+        Segment-segment distances ``[length]``.
+
+    Examples
+    --------
+    >>> hairpin = [[0, 0], [1, 0], [1, 0.1], [0, 0.1]]
+    >>> pairs, d = close_segment_pairs(hairpin, 0.2)
+    >>> pairs.tolist(), d.round(6).tolist()
+    ([[0, 2]], [0.1])
+    """
+    pos = _as_positions(positions)
+    if not (np.isfinite(cutoff) and cutoff > 0):
+        raise ValueError(f"cutoff must be a positive distance, got {cutoff}")
+    if pos.shape[0] < 4:
+        return np.empty((0, 2), dtype=np.int64), np.empty(0)
+    pairs, dist = _close_pairs(pos, float(cutoff))
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return pairs[order], dist[order]
+
+
+def point_segment_distance(point, a, b) -> float:
+    """Euclidean distance ``[length]`` from ``point`` to the closed segment ``ab``.
+
+    >>> point_segment_distance([0.5, 2.0], [0, 0], [1, 0])
+    2.0
+    >>> point_segment_distance([3.0, 4.0], [0, 0], [0, 0])
+    5.0
+    """
+    (px, py), (ax, ay), (bx, by) = (np.asarray(v, dtype=float) for v in (point, a, b))
+    return float(_point_segment(px, py, ax, ay, bx, by)[0])
+
+
+def segment_distance(positions, i: int, j: int) -> float:
+    """Distance ``[length]`` between segments ``i`` and ``j`` (0 if they intersect).
+
+    >>> segment_distance([[0, 0], [1, 0], [1, 0.1], [0, 0.1]], 0, 2)
+    0.1
+    """
+    pos = _as_positions(positions)
+    n = pos.shape[0] - 1
+    if not (0 <= i < n and 0 <= j < n) or abs(i - j) < 2:
+        raise ValueError(f"need two non-adjacent segments of {n}, got {i} and {j}")
+    return float(_segment_segment(pos, int(i), int(j)))
+
+
+def segment_lengths(positions) -> np.ndarray:
+    """Lengths ``[length]`` of the segments, shape ``(n_nodes - 1,)``.
+
+    >>> segment_lengths([[0, 0], [3, 4], [3, 5]]).tolist()
+    [5.0, 1.0]
+    """
+    pos = _as_positions(positions)
+    return np.hypot(*np.diff(pos, axis=0).T)
+
+
+def turning_angles(positions) -> np.ndarray:
+    """Signed turning angles θ_i ∈ (-π, π] at the interior nodes, shape ``(n_nodes - 2,)``.
+
+    θ_i is the angle from segment ``i - 1`` to segment ``i`` (counter-clockwise positive), the
+    bending angle of the paper's Eq. (1).
+
+    >>> np.degrees(turning_angles([[0, 0], [1, 0], [1, 1], [0, 1]])).tolist()
+    [90.0, 90.0]
+    """
+    pos = _as_positions(positions)
+    e = np.diff(pos, axis=0)
+    cross = e[:-1, 0] * e[1:, 1] - e[:-1, 1] * e[1:, 0]
+    dot = np.einsum("ij,ij->i", e[:-1], e[1:])
+    return np.arctan2(cross, dot)
+
+
+# --------------------------------------------------------------------------------------------
+# Node-segment pairs within a distance (the hard core's neighbour list)
+# --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _node_segment_pairs(pos, cutoff):
+    """Pairs (node k, segment j) closer than ``cutoff`` whose segments are non-adjacent.
+
+    Node k belongs to segments k - 1 and k; the pair is kept when segment j is non-adjacent
+    (``|a - j| >= 2``) to at least one segment a that holds k. Each segment is inserted in every
+    cell its box (padded by the cutoff) overlaps, so a node queries its own cell only and finds
+    each pair once. The boxes are copied in table order so that a query reads memory
+    sequentially.
+    """
+    n = pos.shape[0]
+    ns = n - 1
+    lox, loy, hix, hiy = _segment_boxes(pos, cutoff)
+    ox = lox.min()
+    oy = loy.min()
+    h = _cell_size(lox, loy, hix, hiy)
+    start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
+    m_tot = item.shape[0]
+    ebox = np.empty((m_tot, 4))
+    for e in range(m_tot):
+        j = item[e]
+        ebox[e, 0] = lox[j]
+        ebox[e, 1] = hix[j]
+        ebox[e, 2] = loy[j]
+        ebox[e, 3] = hiy[j]
+    out_k = np.empty(max(16, n), dtype=np.int64)
+    out_j = np.empty(max(16, n), dtype=np.int64)
+    m = 0
+    for k in range(n):
+        px, py = pos[k, 0], pos[k, 1]
+        if px < ox or py < oy:
+            continue
+        ix = _cell(px, ox, h)
+        iy = _cell(py, oy, h)
+        bkt = _cell_hash(ix, iy, mask)
+        for e in range(start[bkt], start[bkt + 1]):
+            if px < ebox[e, 0] or px > ebox[e, 1] or py < ebox[e, 2] or py > ebox[e, 3]:
+                continue
+            if cx[e] != ix or cy[e] != iy:
+                continue
+            j = item[e]
+            if not ((k >= 1 and abs(k - 1 - j) >= 2) or (k <= ns - 1 and abs(k - j) >= 2)):
+                continue
+            d = _point_segment(px, py, pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1])[0]
+            if d >= cutoff:
+                continue
+            if m == out_k.shape[0]:
+                bk = np.empty(2 * m, dtype=np.int64)
+                bj = np.empty(2 * m, dtype=np.int64)
+                bk[:m] = out_k
+                bj[:m] = out_j
+                out_k, out_j = bk, bj
+            out_k[m] = k
+            out_j[m] = j
+            m += 1
+    return out_k[:m], out_j[:m]
+
+
+def node_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes closer than ``cutoff`` to a segment non-adjacent to one of the node's segments.
+
+    These (node, segment) pairs carry the hard core of :mod:`crumple.energy`: every pair of
+    non-adjacent segments closer than the cutoff has at least one endpoint within the cutoff of
+    the other segment. O(n) expected time.
+
+    Parameters
+    ----------
+    positions : array_like, shape (n_nodes, 2)
+        ``[length]``
+    cutoff : float
+        ``[length]``, > 0.
+
+    Returns
+    -------
+    nodes, segments : ndarray of int, shape (n_pairs,)
+
+    Examples
+    --------
+    >>> k, j = node_segment_pairs([[0, 0], [1, 0], [1, 0.1], [0, 0.1]], 0.2)
+    >>> sorted(zip(k.tolist(), j.tolist()))
+    [(0, 2), (1, 2), (2, 0), (3, 0)]
+    """
+    pos = _as_positions(positions)
+    if not (np.isfinite(cutoff) and cutoff > 0):
+        raise ValueError(f"cutoff must be a positive distance, got {cutoff}")
+    if pos.shape[0] < 4:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    return _node_segment_pairs(pos, float(cutoff))
