@@ -17,6 +17,7 @@ Conventions of every number (stated in the report too):
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -249,3 +250,11 @@ def _range(r, half_open: bool = False) -> str:
     if not r:
         return "—"
     return f"({r[0]:.4g}, {r[1]:.4g}]" if half_open else f"[{r[0]:.4g}, {r[1]:.4g}]"
+
+
+def nan_quiet(f, *args, **kw):
+    """``f(*args, **kw)`` (a NaN-aware NumPy reduction) without the warning of an all-NaN
+    slice: a stage no point reached, or a straight stage's E_b, is NaN by design."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "All-NaN slice|Mean of empty slice", RuntimeWarning)
+        return f(*args, **kw)

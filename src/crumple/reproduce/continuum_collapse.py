@@ -12,13 +12,13 @@ discretisation error as its σ), one claim (do the paper's curves collapse again
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 
 from ..paper import PaperValue
-from .common import Context, Estimate, Record, _alt, _row
+from .common import Context, Estimate, Record, _alt, _row, nan_quiet
 from .continuum import COLLAPSE, FIG5
+from .lambda_collapse import collapses, draw_lambda_collapse, fig5_curves, log_scatter
 from .series import Series
 
 NAME = "continuum_collapse"
@@ -95,14 +95,6 @@ def on_grid(curves: list[dict], grid, name: str) -> np.ndarray:
     return out
 
 
-def nan_quiet(f, *args, **kw):
-    """``f(*args, **kw)`` (a NaN-aware NumPy reduction) without the warning of an all-NaN
-    slice: a stage no point reached, or a straight stage's E_b, is NaN by design."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", "All-NaN slice|Mean of empty slice", RuntimeWarning)
-        return f(*args, **kw)
-
-
 def _spread(v: np.ndarray) -> np.ndarray:
     """(max − min)/|mean| over axis 0 (NaN-aware; NaN where fewer than 2 values)."""
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -136,33 +128,6 @@ def spreads(curves: list[dict], grid, name: str) -> dict:
 def _max(a) -> float:
     a = np.asarray(a, float)
     return float(np.nanmax(a)) if np.isfinite(a).any() else math.nan
-
-
-def _log_scatter(curves: dict, n_grid: int = 40) -> float:
-    """RMS over a common log grid (the abscissae's overlap) of the standard deviation of
-    ln y across the curves; curves: label -> (x, y), x increasing."""
-    lo = max(float(np.min(x)) for x, _ in curves.values())
-    hi = min(float(np.max(x)) for x, _ in curves.values())
-    if not lo < hi:
-        return math.nan
-    g = np.geomspace(lo, hi, n_grid)
-    ly = np.array([np.interp(np.log(g), np.log(x), np.log(y)) for x, y in curves.values()])
-    return float(np.sqrt(np.mean(ly.std(axis=0) ** 2)))
-
-
-def _fig5_curves(s: Series) -> dict:
-    out = {}
-    for p, key in enumerate(s.keys):
-        y = nan_quiet(np.nanmean, s.obs["r_max"][p], axis=0)
-        ok = np.isfinite(y) & (s.lam > 0)
-        n = s.positions.shape[3] - 1
-        out[(float(key[0]), float(key[1]))] = {
-            "lam": s.lam[ok],
-            "Lambda": s.lam[ok] * n / float(key[0]),
-            "r_max": y[ok],
-            "N": n,
-        }
-    return out
 
 
 def measure(ctx: Context) -> Record:
@@ -200,10 +165,9 @@ def measure(ctx: Context) -> Record:
                     1,
                 )
             )
-    f5 = _fig5_curves(ctx.series["continuum_fig5"])
-    before = _log_scatter({k: (c["lam"], c["r_max"]) for k, c in f5.items()})
-    after = _log_scatter({k: (c["Lambda"], c["r_max"]) for k, c in f5.items()})
-    collapses = bool(np.isfinite(after) and after <= before / 3 and after <= 0.05)
+    f5 = fig5_curves(ctx.series["continuum_fig5"])
+    before = log_scatter({k: (c["lam"], c["r_max"]) for k, c in f5.items()})
+    after = log_scatter({k: (c["Lambda"], c["r_max"]) for k, c in f5.items()})
     claim = {
         "claim": "the paper's Fig. 5 curves (six (k_b, k_s), N = 100) collapse against Λ = λN/k_b",
         "source": "issue 12: 'The curves in Fig. 5a for k_b = 1 (two values of k_s) lie on "
@@ -211,7 +175,7 @@ def measure(ctx: Context) -> Record:
         "measured": f"scatter of ln r_max across the six curves {before:.3f} against λ, "
         f"{after:.3f} against Λ (RMS over the common range)",
         "criterion": "collapse if the scatter against Λ is ≤ 1/3 of that against λ and ≤ 0.05",
-        "verdict": "collapse" if collapses else "no collapse",
+        "verdict": "collapse" if collapses(before, after) else "no collapse",
     }
     extra = {
         "continuum_collapse": {
@@ -252,20 +216,10 @@ def draw(rec: Record) -> dict:
         ax.set_xlabel("Λ = λL⁴/B")
         ax.set_ylabel(q)
     axes.flat[0].legend(fontsize=7)
-    f5 = rec.detail["fig5"]
-    fig2, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
-    for k, c in f5.items():
-        lab = f"k_b={k[0]:g}, k_s={k[1]:g}"
-        a.loglog(c["lam"], c["r_max"], "o-", ms=3, lw=1, label=lab)
-        b.loglog(c["Lambda"], c["r_max"], "o-", ms=3, lw=1, label=lab)
-    a.set_xlabel("λ")
-    b.set_xlabel("Λ = λN/k_b")
-    for ax in (a, b):
-        ax.set_ylabel("r_max / L")
-    a.legend(fontsize=7)
     ex = rec.extra["continuum_collapse"]
-    a.set_title(f"against λ: scatter of ln r_max {ex['fig5_scatter_lambda']:.3f}")
-    b.set_title(f"against Λ: scatter {ex['fig5_scatter_Lambda']:.3f}")
+    fig2 = draw_lambda_collapse(
+        rec.detail["fig5"], ex["fig5_scatter_lambda"], ex["fig5_scatter_Lambda"]
+    )
     return {"continuum_collapse": fig, "continuum_fig5_lambda": fig2}
 
 

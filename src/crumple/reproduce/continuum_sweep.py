@@ -27,9 +27,8 @@ from ..fit import fit_power_law
 from ..observables import mass_size_exponent, mass_within
 from ..paper import PaperValue
 from ..theory import gamma_prediction
-from .common import Context, Estimate, Record, _alt, _combine, _row
+from .common import Context, Estimate, Record, _alt, _combine, _row, nan_quiet
 from .continuum import PERFECT, SWEEP
-from .continuum_collapse import nan_quiet
 from .series import Series, _local_slopes
 
 NAME = "continuum_sweep"

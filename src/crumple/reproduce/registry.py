@@ -32,6 +32,7 @@ from . import (
     fig4_gamma,
     fig5_radius,
     fig6_plasticity,
+    lambda_collapse,
     loop_shape,
     minimizer,
 )
@@ -44,6 +45,7 @@ SECTIONS: tuple[ModuleType, ...] = (
     fig3_mass_size,
     fig4_gamma,
     fig5_radius,
+    lambda_collapse,
     fig6_plasticity,
     fig2_configurations,
     fig2_loops,
