@@ -339,3 +339,28 @@ def test_cli_runs_an_injection_and_rejects_unknown_protocol_keys(tmp_path, capsy
     cfg.write_text('[protocol]\nkind = "ramp"\npush = 0.5\n')
     assert main(["run", "--config", str(cfg), "--out", str(tmp_path / "q")]) == 2
     assert "push" in capsys.readouterr().err
+
+
+def test_sweep_protocol_table():
+    from crumple.sweep import Sweep
+
+    wire = {"k_b": 1.0, "k_s": 1e4, "n_segments": 20, "hard_core": 0.002, "cavity_radius": 0.1}
+    s = Sweep.from_dict({"wire": wire, "protocol": {"kind": "injection", "push": [0.05, 0.1],
+                                                    "stop_length": 0.5}})  # fmt: skip
+    assert s.kind == "injection" and s.dims == {"push": (0.05, 0.1)}
+    runs = s.runs()
+    assert {r.protocol for r in runs} == {"injection"}
+    assert runs[1].stages == (0.1, 0.2, 0.30000000000000004, 0.4, 0.5)
+    assert len({r.id for r in runs}) == 2
+    assert Sweep.from_dict(s.to_dict()).runs()[0].id == runs[0].id
+    with pytest.raises(ValueError, match="stop_lenght"):
+        Sweep.from_dict({"wire": wire, "protocol": {"kind": "injection", "stop_lenght": 1}})
+    with pytest.raises(ValueError, match="push"):
+        Sweep.from_dict({"wire": wire, "protocol": {"kind": "ramp", "push": 1}})
+    with pytest.raises(ValueError, match="kind"):
+        Sweep.from_dict({"wire": wire, "protocol": {"kind": "inject"}})
+    with pytest.raises(ValueError, match="cavity"):
+        Sweep.from_dict({"wire": {"k_b": 1.0}, "protocol": {"kind": "injection"}})
+    with pytest.raises(ValueError, match=r"\[ramp\]"):
+        Sweep.from_dict({"wire": wire, "ramp": {"lambdas": [1, 2]},
+                         "protocol": {"kind": "injection"}})  # fmt: skip

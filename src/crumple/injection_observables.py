@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from .feed import wall_blocks
 from .geometry import close_segment_pairs
 from .injection import InjectionResult, packing_fraction
 from .model import Wire
@@ -28,6 +29,8 @@ INJECTION_OBSERVABLES = {
     "injected_length": ("length", "L_in, the length pushed into the cavity"),
     "packing_fraction": ("1", "φ = h L_in / (π R_c²), h the hard-core width"),
     "feed_force": ("energy/length", "force of the pusher along the channel, Σ_fixed ∂E/∂x · u"),
+    "wall_force": ("energy/length", "total force of the wall on the wire, Σ_free |∂E_wall/∂x_i| "
+                   "(the confining pressure times 2π R_c)"),
     "contacts": ("1", "pairs of non-adjacent segments of the injected part closer than 2 d"),
     "wall_contacts": ("1", "nodes of the injected part closer than 2 d to the wall"),
     "n_loops": ("1", "loops of the injected part at contact distance 2 d (closed by wire-wire "
@@ -89,7 +92,11 @@ def measure_injection(result: InjectionResult) -> dict[str, np.ndarray]:
     out["injected_length"] = result.injected_lengths
     out["packing_fraction"] = packing_fraction(result.wire, result.injected_lengths)
     out["feed_force"] = result.feed_forces
+    w = result.wire
     for s, st in enumerate(result.stages):
-        for k, v in measure_stage(st.positions, result.wire).items():
+        for k, v in measure_stage(st.positions, w).items():
             out[k][s] = v
+        g = wall_blocks(st.positions[st.free], w.cavity_radius, w.hard_core,
+                        w.hard_core_energy)[1]  # fmt: skip
+        out["wall_force"][s] = float(np.hypot(g[:, 0], g[:, 1]).sum())
     return out

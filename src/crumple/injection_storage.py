@@ -44,7 +44,14 @@ from .minimize import MinimizeResult
 from .model import Wire
 from .storage import _jsonable_seed, atomic_path, versions
 
-__all__ = ["FORMAT", "load_injections", "planned_lengths", "save_injections"]
+__all__ = [
+    "FORMAT",
+    "load_injections",
+    "planned_lengths",
+    "read_injection_arrays",
+    "save_injections",
+    "verify_injections",
+]
 
 FORMAT = "crumple-injections"
 FORMAT_VERSION = 1
@@ -142,22 +149,45 @@ def save_injections(path, results: list[InjectionResult], *, seed=None,
     return path
 
 
-def read_injection_arrays(path, *, positions: bool = False) -> dict:
-    """The arrays of a complete injection file as NumPy arrays (``attrs`` JSON-decoded)."""
+def verify_injections(path, *, run_id: str | None = None) -> dict:
+    """Check that ``path`` is a complete injection file (of run ``run_id``); returns its root
+    attributes, JSON-decoded. Raises ``ValueError`` naming what is wrong."""
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise ValueError(f"{path} is not a readable HDF5 file ({exc})") from None
-    with f:
-        if f.attrs.get("format") != FORMAT or not f.attrs.get("complete", False):
-            raise ValueError(f"{path} is not a complete crumple injection file")
-        out: dict = {"attrs": {k: _decode(v) for k, v in f.attrs.items()}}
+    try:
+        with f:
+            attrs = {k: _decode(v) for k, v in f.attrs.items()}
+            if attrs.get("format") != FORMAT:
+                raise ValueError(f"{path} is not a crumple injection file")
+            if attrs.get("complete") is not True:
+                raise ValueError(f"{path} is incomplete (no 'complete' marker)")
+            if run_id is not None and attrs.get("run_id") != run_id:
+                raise ValueError(f"{path} holds run {attrs.get('run_id')!r}, not {run_id!r}")
+            n_stage = f["injected_length"].shape[0]
+            n_rep = f["n_stages"].shape[0]
+            if f["positions"].shape[:2] != (n_rep, n_stage):
+                raise ValueError(f"{path}: positions do not match the stages and replicas")
+    except (OSError, KeyError, RuntimeError) as exc:
+        raise ValueError(f"{path} is damaged ({exc})") from None
+    return attrs
+
+
+def read_injection_arrays(path, *, positions: bool = False, run_id: str | None = None) -> dict:
+    """The arrays of a complete injection file as NumPy arrays (``attrs`` JSON-decoded)."""
+    attrs = verify_injections(path, run_id=run_id)
+    with h5py.File(path, "r") as f:
+        out: dict = {"attrs": attrs}
 
         def visit(name, obj):
             if isinstance(obj, h5py.Dataset) and (positions or name != "positions"):
                 out[name] = obj.asstr()[()] if obj.dtype.kind == "O" else obj[()]
 
-        f.visititems(visit)
+        try:
+            f.visititems(visit)
+        except (OSError, KeyError, RuntimeError) as exc:
+            raise ValueError(f"{path} is damaged ({exc})") from None
     return out
 
 
