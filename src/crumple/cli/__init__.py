@@ -1,8 +1,6 @@
 """The ``crumple`` command line: thin wrappers over the library.
 
-    crumple run       [--config FILE.toml] [flags]    run a confinement ramp (or, with
-                                                     --protocol injection, an injection into
-                                                     a cavity), write HDF5 + PNG
+    crumple run       [--config FILE.toml] [flags]    a ramp (or --protocol injection): HDF5, PNG
     crumple energy    FILE --kb .. --ks .. --lam ..    energy of a configuration by term (JSON)
     crumple measure   FILE [options]                   observables of a configuration (JSON)
     crumple export    FILE.h5 [--lam L | --stage i]    one stored configuration as npy/csv/xyz
