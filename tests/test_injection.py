@@ -364,3 +364,30 @@ def test_sweep_protocol_table():
     with pytest.raises(ValueError, match=r"\[ramp\]"):
         Sweep.from_dict({"wire": wire, "ramp": {"lambdas": [1, 2]},
                          "protocol": {"kind": "injection"}})  # fmt: skip
+
+
+def test_load_an_injection_store_with_n_swept(tmp_path):
+    """crumple.load on a store of injections: the stage dimension L_in, the observables, and
+    positions NaN-padded to the largest wire."""
+    import crumple
+    from crumple.sweep import Sweep, run_sweep
+
+    sweep = Sweep(
+        wire={"k_b": 1.0, "k_s": 1e4, "n_segments": [10, 12], "hard_core": 0.002,
+              "cavity_radius": 0.1},
+        protocol={"kind": "injection", "stop_length": 0.4},
+    )  # fmt: skip
+    run_sweep(sweep, tmp_path / "s", workers=1)
+    ds = crumple.load(tmp_path / "s", positions=True)
+    assert ds.attrs["protocol"] == "injection" and "L_in" in ds.dims
+    assert ds.sizes["node"] == 13
+    assert bool(ds.done.all()) and set(ds.stop_reason.values.ravel()) == {"length"}
+    x10 = ds.positions.sel(n_segments=10, replica=0).isel(L_in=-1).values
+    assert np.isnan(x10[11:]).all() and np.isfinite(x10[:11]).all()
+    # one segment per stage: the stages of N = 10 and N = 12 interleave on the union of L_in
+    got = ds.injected_length.sel(n_segments=12, replica=0).values
+    ran = np.isfinite(got)
+    assert ran.sum() == 5 and np.allclose(got[ran], ds.L_in.values[ran])
+    for k in ("feed_force", "packing_fraction", "contacts", "wall_contacts", "n_loops",
+              "D_M_com", "D_M_center", "wall_force", "E_wall", "gamma"):  # fmt: skip
+        assert k in ds

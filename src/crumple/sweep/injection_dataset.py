@@ -86,7 +86,7 @@ def _read(out: Path, m: dict, L: np.ndarray, run_shape: tuple, positions: bool):
         "run_id": np.full(run_shape, "", dtype=object),
         "stop_reason": np.full(run_shape, "", dtype=object),
     }
-    pos = None
+    pos_arrays: dict[tuple, tuple] = {}
     bad = 0
     for entry in m["runs"]:
         rid = entry["id"]
@@ -117,13 +117,13 @@ def _read(out: Path, m: dict, L: np.ndarray, run_shape: tuple, positions: bool):
         per_run["n_stages"][at] = a["n_stages"][0]
         per_run["stop_reason"][at] = str(a["stop_reason"][0])
         if positions:
-            p = a["positions"][0]
-            if pos is None:
-                pos = np.full((*stage_shape, p.shape[-2], 2), np.nan)
-            n = min(p.shape[-2], pos.shape[-2])
-            pos[(*at, j, slice(0, n))] = p[:, :n]
+            pos_arrays[at] = (j, a["positions"][0])
     per_run["run_id"] = per_run["run_id"].astype(str)
     per_run["stop_reason"] = per_run["stop_reason"].astype(str)
-    if positions and pos is None:
-        pos = np.full((*stage_shape, 0, 2), np.nan)
+    pos = None
+    if positions:  # NaN-padded to the largest wire when N is swept
+        n_max = max((p.shape[-2] for _, p in pos_arrays.values()), default=0)
+        pos = np.full((*stage_shape, n_max, 2), np.nan)
+        for at, (j, p) in pos_arrays.items():
+            pos[(*at, j, slice(0, p.shape[-2]))] = p
     return data, per_run, pos, bad
