@@ -1,6 +1,6 @@
 """The ``crumple`` command line: thin wrappers over the library.
 
-    crumple run       [--config FILE.toml] [flags]    run a confinement ramp, write HDF5 + PNG
+    crumple run       [--config FILE.toml] [flags]    a ramp (or --protocol injection): HDF5, PNG
     crumple energy    FILE --kb .. --ks .. --lam ..    energy of a configuration by term (JSON)
     crumple measure   FILE [options]                   observables of a configuration (JSON)
     crumple export    FILE.h5 [--lam L | --stage i]    one stored configuration as npy/csv/xyz
@@ -11,13 +11,15 @@
     crumple reproduce [--quick] [--out DIR]            the paper's figures and numbers
     crumple figures   DIR                              redraw reproduce's report, no simulation
     crumple study     continuum [--quick] [--out DIR]  a study beyond the paper (continuum limit)
+    crumple study     cavity [--quick] [--out DIR]     injection into a cavity vs the potential
 
 Every error is one line on stderr and a non-zero exit status, never a traceback.
 
 Modules, by concept: :mod:`.inputs` (reading and validating files, flags, TOML),
-:mod:`.results` (reading a results file), :mod:`.run`, :mod:`.inspect` (energy, measure,
-export), :mod:`.media` (plot, animate), :mod:`.sweep_cmds` (sweep, status, reproduce,
-figures), :mod:`.study` (study). Each command module has a ``register(subparsers)``.
+:mod:`.results` (reading a results file), :mod:`.run`, :mod:`.run_injection` (run
+--protocol injection), :mod:`.inspect` (energy, measure, export), :mod:`.media` (plot,
+animate), :mod:`.sweep_cmds` (sweep, status, reproduce, figures), :mod:`.study` (study).
+Each command module has a ``register(subparsers)``.
 """
 
 from __future__ import annotations

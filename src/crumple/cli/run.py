@@ -48,6 +48,9 @@ _WIRE_KEYS = {
 }
 _RAMP_KEYS = ("initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step")
 _RUN_KEYS = ("replicas", "seed", "workers", "out", "figure_lambdas", "overwrite")
+#: The tables of a run's TOML file ([protocol]: kind = "ramp" | "injection", and the
+#: injection's parameters).
+_TABLES = ("wire", "ramp", "run", "protocol")
 #: Units of the echoed parameters (lengths in units of L0, energies in the paper's units).
 _UNITS = {
     "k_b": "[energy]",
@@ -69,15 +72,12 @@ class Terminated(BaseException):
     """SIGTERM, raised in the main thread so that workers are stopped on the way out."""
 
 
-def build_run(args):
-    """Wire, Ramp and run options from the TOML file overridden by the flags."""
+def build_wire(args, cfg: dict, defaults: dict | None = None):
+    """The Wire of the TOML file's ``[wire]`` table overridden by the flags; ``defaults``
+    fill keys that neither gives (the injection's cavity and thickness)."""
     from ..model import Plasticity, Wire
-    from ..protocol import Ramp, default_schedule
 
-    cfg = load_toml(args.config) if args.config else {}
     w = dict(cfg.get("wire", {}))
-    r = dict(cfg.get("ramp", {}))
-    run = dict(cfg.get("run", {}))
     for flag, key in _WIRE_KEYS.items():
         v = getattr(args, flag)
         if v is not None:
@@ -89,16 +89,43 @@ def build_run(args):
     unknown = set(w) - set(Wire.__dataclass_fields__) - {"young", "radius", "bending", "stretching"}
     if unknown:
         raise CLIError(f"unknown [wire] key(s): {', '.join(sorted(unknown))}")
+    for k, v in (defaults or {}).items():
+        w.setdefault(k, v(w) if callable(v) else v)
     if isinstance(w.get("plasticity"), dict):
         w["plasticity"] = Plasticity(**w["plasticity"])
     if "young" in w or "radius" in w:
-        wire = Wire.from_material(**w)
-    elif "bending" in w or "stretching" in w:
-        wire = Wire.from_continuum(**w)
-    else:
-        w.setdefault("k_b", 5.0)
-        w.setdefault("k_s", 5e5)
-        wire = Wire(**w)
+        return Wire.from_material(**w)
+    if "bending" in w or "stretching" in w:
+        return Wire.from_continuum(**w)
+    w.setdefault("k_b", 5.0)
+    w.setdefault("k_s", 5e5)
+    return Wire(**w)
+
+
+def protocol_kind(args, cfg: dict) -> str:
+    """``ramp`` or ``injection``: ``--protocol``, else the TOML's ``[protocol] kind``."""
+    table = cfg.get("protocol", {})
+    if not isinstance(table, dict):
+        raise CLIError('[protocol] must be a table (kind = "ramp" | "injection", ...)')
+    kind = args.protocol or table.get("kind", "ramp")
+    if kind not in ("ramp", "injection"):
+        raise CLIError(f"[protocol] kind must be 'ramp' or 'injection', got {kind!r}")
+    if kind == "ramp" and set(table) - {"kind"}:
+        raise CLIError(
+            f"unknown [protocol] key(s) for kind = 'ramp': "
+            f"{', '.join(sorted(set(table) - {'kind'}))} (the ramp's parameters go in [ramp])"
+        )
+    return kind
+
+
+def build_run(args):
+    """Wire, Ramp and run options from the TOML file overridden by the flags."""
+    from ..protocol import Ramp, default_schedule
+
+    cfg = load_toml(args.config, _TABLES) if args.config else {}
+    r = dict(cfg.get("ramp", {}))
+    run = dict(cfg.get("run", {}))
+    wire = build_wire(args, cfg)
     for key in _RAMP_KEYS:
         v = getattr(args, key)
         if v is not None:
@@ -395,6 +422,11 @@ def _on_sigterm(signum, frame):
 
 
 def cmd_run(args) -> int:
+    cfg = load_toml(args.config, _TABLES) if args.config else {}
+    if protocol_kind(args, cfg) == "injection":
+        from .run_injection import cmd_injection
+
+        return cmd_injection(args, cfg)
     wire, ramp, run = build_run(args)
     n_rep = run["replicas"]
     seed = run.get("seed", 0)
@@ -517,7 +549,7 @@ _FLAGS = [
 def register(sub) -> None:
     p = sub.add_parser(
         "run",
-        help="run a quasi-static confinement ramp",
+        help="run a quasi-static confinement ramp (or an injection into a cavity)",
         description="Run a quasi-static confinement ramp (and its replicas); write "
         "OUT/ramps.h5 and OUT/configurations.png. Lengths are in units of L0, energies in the "
         "paper's units. Flags override the TOML file; every parameter is echoed before the run.",
@@ -533,4 +565,12 @@ def register(sub) -> None:
         help="replace an existing OUT/ramps.h5 (refused otherwise)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument(
+        "--protocol",
+        choices=["ramp", "injection"],
+        help="the loading protocol (default: the TOML's [protocol] kind, else ramp)",
+    )
+    from .run_injection import add_injection_flags
+
+    add_injection_flags(p)
     p.set_defaults(func=cmd_run)

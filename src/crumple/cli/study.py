@@ -49,7 +49,8 @@ def register(sub) -> None:
     from ..reproduce.study import STUDIES
 
     p = sub.add_parser("study", help="a study beyond the paper (continuum: the confinement "
-                       "number Λ), run and reported like reproduce")  # fmt: skip
+                       "number Λ; cavity: injection against potential confinement), run and "
+                       "reported like reproduce")  # fmt: skip
     p.add_argument("name", choices=STUDIES, help="which study")
     p.add_argument("--quick", action="store_true", help="the quick profile (≤ 10 min, 2 cores)")
     p.add_argument("--profile", default="full", help="full (default), quick or smoke")

@@ -139,7 +139,9 @@ def _add_cluster_flags(p) -> None:
 
 def register(sub) -> None:
     p = sub.add_parser("sweep", help="run a parameter sweep on Dask, resumably (docs/sweeps.md)")
-    p.add_argument("config", help="sweep file: [sweep], [wire], [ramp] tables, [[point]]s")
+    p.add_argument(
+        "config", help="sweep file: [sweep], [wire], [ramp] (or [protocol]) tables, [[point]]s"
+    )
     p.add_argument("--out", required=True, help="store directory (rerun to resume)")
     _add_cluster_flags(p)
     p.set_defaults(func=_cmd_sweep)

@@ -5,7 +5,8 @@ state, no display needed); save it with ``fig.savefig(path)``.
 
 Modules, by concept: :mod:`~crumple.figures.configurations` (wires drawn as they are),
 :mod:`~crumple.figures.curves` (the report's curves and fits), :mod:`~crumple.figures.loops`
-(loops); every figure is importable from here, as ``crumple.figures.<name>``.
+(loops), :mod:`~crumple.figures.injection` (a wire in its cavity); every figure is importable
+from here, as ``crumple.figures.<name>``.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from .curves import (
     plot_plasticity,
     plot_radius,
 )
+from .injection import plot_injection
 from .loops import plot_loop_count, plot_loop_shape
 
 __all__ = [
@@ -26,6 +28,7 @@ __all__ = [
     "plot_configuration_rows",
     "plot_configurations",
     "plot_gamma",
+    "plot_injection",
     "plot_loop_count",
     "plot_loop_shape",
     "plot_mass_size",

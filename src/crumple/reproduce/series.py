@@ -104,6 +104,8 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
         ds = ds.expand_dims("point")
     m = json.loads(ds.attrs["sweep"])
     hard_core = float(m.get("wire", {}).get("hard_core", 1e-5))
+    if ds.attrs.get("protocol") == "injection":
+        return _injection_series(ds, keys, incomplete, hard_core)
     s = Series(
         keys=keys,
         lam=ds["lam"].values.astype(float),
@@ -126,6 +128,33 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
     # the report.
     s.obs["straight"] = is_straight(s.obs["max_angle"])
     s.obs["gamma"] = ds["gamma"].values
+    return s
+
+
+def _injection_series(ds, keys, incomplete, hard_core) -> Series:
+    """An injection store as a :class:`Series`: ``lam`` holds the injected lengths L_in, the
+    energies are the injection's (``wall`` added, ``confinement`` zero), ``obs`` the
+    injection's observables (:data:`crumple.injection_observables.INJECTION_OBSERVABLES`)
+    and ``gamma``."""
+    from ..injection_observables import INJECTION_OBSERVABLES
+
+    energies = {t: ds[f"E_{t}"].values for t in ("bending", "stretching", "hard_core", "wall",
+                                                   "total")}  # fmt: skip
+    energies["confinement"] = np.zeros_like(energies["total"])
+    s = Series(
+        keys=keys,
+        lam=ds["L_in"].values.astype(float),
+        positions=ds["positions"].values,
+        energies=energies,
+        converged=ds["converged"].values,
+        max_force=ds["max_force"].values,
+        done=ds["done"].values,
+        incomplete=incomplete,
+        hard_core=hard_core,
+    )
+    s.obs.update({k: ds[k].values for k in INJECTION_OBSERVABLES})
+    s.obs["gamma"] = ds["gamma"].values
+    s.obs["stop_reason"] = ds["stop_reason"].values
     return s
 
 

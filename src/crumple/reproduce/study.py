@@ -63,9 +63,10 @@ PAPER = Study(
 
 
 def _studies() -> dict[str, Study]:
+    from .cavity import CAVITY
     from .continuum import CONTINUUM
 
-    return {"continuum": CONTINUUM}
+    return {"continuum": CONTINUUM, "cavity": CAVITY}
 
 
 def get(name: str) -> Study:
@@ -77,4 +78,4 @@ def get(name: str) -> Study:
 
 
 #: The names of the studies ``crumple study`` runs (the paper's is ``crumple reproduce``).
-STUDIES = ("continuum",)
+STUDIES = ("continuum", "cavity")

@@ -62,11 +62,19 @@ def load(path, *, positions: bool = False):
     Runs that are missing, failed or whose file is damaged are NaN (``done`` false) and an
     :class:`IncompleteSweepWarning` says how many; a damaged file is never read as data.
     See ``docs/sweeps.md``.
+
+    A store of injections (``[protocol] kind = "injection"``) has the stage dimension
+    ``L_in`` (the injected length) in place of ``lam``, and the variables of
+    :func:`crumple.sweep.injection_dataset.load_injection_store`.
     """
     import xarray as xr
 
     out = Path(path)
     m = _read_manifest(out, for_load=True)
+    if m.get("protocol") == "injection":
+        from .injection_dataset import load_injection_store
+
+        return load_injection_store(out, m, positions=positions)
     lam = np.asarray(m["lambdas"], dtype=float)
     coords, names, shape = _grid_coords(m["dims"])
     n_rep = int(m["replicas"])

@@ -104,7 +104,8 @@ def execute_run(task: Mapping, out: str, topic: str | None = None) -> dict:
         if report is not None:
             report(0)
         result = run.compute(None if report is None else lambda i, n, stage: report(i + 1))
-        save_ramps(
+        _save(
+            run,
             _h5(out_path, rid),
             [result],
             seed=run.seed,
@@ -114,7 +115,7 @@ def execute_run(task: Mapping, out: str, topic: str | None = None) -> dict:
                 "coords": task.get("coords", {}),
                 "host": socket.gethostname(),
             },
-            observables=_stage_observables(result),
+            observables=lambda: _stage_observables(result),
         )
     except Exception as exc:  # recorded, with its traceback, for `crumple status`
         _record_failure(
@@ -132,6 +133,17 @@ def execute_run(task: Mapping, out: str, topic: str | None = None) -> dict:
         }
     _failed(out_path, rid).unlink(missing_ok=True)
     return {"id": rid, "status": "done", "seconds": result.seconds, "converged": result.converged}
+
+
+def _save(run, path, results, *, seed, attrs, observables) -> None:
+    """A ramp's file (:func:`crumple.storage.save_ramps`, with ``observables``) or an
+    injection's (:func:`crumple.injection_storage.save_injections`, which measures its own)."""
+    if run.protocol == "injection":
+        from ..injection_storage import save_injections
+
+        save_injections(path, results, seed=seed, attrs=attrs)
+    else:
+        save_ramps(path, results, seed=seed, attrs=attrs, observables=observables())
 
 
 def _stage_observables(result) -> dict:
@@ -336,10 +348,10 @@ def run_sweep(
         if todo:
             with _connect(client, scheduler, workers, len(todo), quiet_logs) as c:
                 n_workers = len(c.scheduler_info().get("workers", {}))
-                n = sum(len(r.ramp.lambdas) for r in sweep.runs())
+                n = sum(len(r.stages) for r in sweep.runs())
                 computed, failed = _execute(c, todo, out, total, skipped, progress, refresh, t0, n)
         elif progress is not None:
-            n = sum(len(r.ramp.lambdas) for r in sweep.runs())
+            n = sum(len(r.stages) for r in sweep.runs())
             progress(Progress(total, total, 0, 0, skipped, time.perf_counter() - t0, 0.0,
                               stages=n, stages_total=n, stages_skipped=n))  # fmt: skip
     return SweepReport(
@@ -370,7 +382,7 @@ def _execute(client, todo, out, total, skipped, progress, refresh, t0, stages_to
 
     token = os.urandom(4).hex()
     topic = f"crumple-stages-{token}"  # one topic per sweep: sweeps may share a client
-    n_stages = {run.id: len(run.ramp.lambdas) for run in todo}
+    n_stages = {run.id: len(run.stages) for run in todo}
     in_flight: dict[str, int] = {}  # run id -> stages reported by its worker
 
     def on_event(event) -> None:  # on the client's event loop: a dict update, nothing more

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..injection import Injection
 from ..model import Plasticity, Wire
 from ..protocol import Ramp, default_schedule, initial_state
 from .store import Run, _canonical, canonical_json
@@ -26,6 +27,9 @@ from .store import Run, _canonical, canonical_json
 _FACTORY_KEYS = ("young", "radius", "bending", "stretching")
 _WIRE_KEYS = (*Wire.__dataclass_fields__, *_FACTORY_KEYS)
 _RAMP_KEYS = (*Ramp.__dataclass_fields__, "schedule")
+#: The [protocol] table of an injection sweep: ``kind`` and the Injection's parameters.
+_INJECTION_KEYS = tuple(Injection.__dataclass_fields__)
+_KINDS = ("ramp", "injection")
 #: Parameters given as a table; their entries are swept one by one.
 _TABLES = {"plasticity": ("s", "theta_p"), "schedule": ("lam_min", "lam_max", "n")}
 #: Parameters whose value is itself a list: a list of lists sweeps over them.
@@ -133,6 +137,12 @@ class Sweep:
         Parameters of :class:`crumple.protocol.Ramp` (``lambdas``, ``initial_noise``,
         ``stage_noise``, ``stop_tol``, ``method``, ``ftol``, ``maxiter``, ``max_step``), or
         ``schedule = {lam_min, lam_max, n}`` for :func:`crumple.protocol.default_schedule`.
+    protocol : mapping
+        ``kind = "ramp"`` (default; the ramp's parameters in ``ramp``) or ``kind =
+        "injection"`` with the parameters of :class:`crumple.injection.Injection` (``push``,
+        ``stop_length``, ``angle``, ``jam_force``, ``max_push``, ``noise``, ``ftol``,
+        ``maxiter``, ``max_step``), which may be lists as ``ramp``'s. The wire then needs a
+        ``cavity_radius``; its ``hard_core`` is the wire's thickness.
     points : sequence of mappings
         Explicit parameter points (wire and ramp keys mixed; each point sets the same keys),
         combined with the grid. Empty: the grid alone.
@@ -163,13 +173,14 @@ class Sweep:
 
     wire: Mapping[str, Any] = field(default_factory=dict)
     ramp: Mapping[str, Any] = field(default_factory=dict)
+    protocol: Mapping[str, Any] = field(default_factory=dict)
     points: tuple[Mapping[str, Any], ...] = ()
     replicas: int = 1
     seed: int = 0
     _plan: _Plan | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        for name in ("wire", "ramp"):
+        for name in ("wire", "ramp", "protocol"):
             value = getattr(self, name)
             if not isinstance(value, Mapping):
                 raise ValueError(f"[{name}] must be a table (mapping), got {value!r}")
@@ -181,6 +192,15 @@ class Sweep:
             if not isinstance(p, Mapping):
                 raise ValueError(f"[[point]] {i + 1} must be a table, got {p!r}")
         object.__setattr__(self, "points", tuple(_freeze(p) for p in points))
+        if self.kind not in _KINDS:
+            raise ValueError(f"[protocol] kind must be 'ramp' or 'injection', got {self.kind!r}")
+        if self.kind == "ramp" and set(self.protocol) - {"kind"}:
+            key = sorted(set(self.protocol) - {"kind"})[0]
+            raise ValueError(f"[protocol] unknown key {key!r} for kind = 'ramp' (the ramp's "
+                             "parameters go in [ramp])")  # fmt: skip
+        if self.kind == "injection" and self.ramp:
+            raise ValueError("[ramp] with [protocol] kind = 'injection': the injection's "
+                             "parameters go in [protocol]")  # fmt: skip
         for name, low in (("replicas", 1), ("seed", 0)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < low:
@@ -196,12 +216,13 @@ class Sweep:
     @classmethod
     def from_dict(cls, d: Mapping) -> Sweep:
         """From the structure of a sweep file: ``sweep``, ``wire``, ``ramp`` and ``point``."""
-        unknown = set(d) - {"sweep", "wire", "ramp", "point"}
+        tables = ["sweep", "wire", "ramp", "protocol", "point"]
+        unknown = set(d) - set(tables)
         if unknown:
             key = sorted(unknown)[0]
             raise ValueError(
-                f"unknown table [{key}]{_suggest(key, ['sweep', 'wire', 'ramp', 'point'])}; "
-                "use [sweep], [wire], [ramp] and [[point]]"
+                f"unknown table [{key}]{_suggest(key, tables)}; "
+                "use [sweep], [wire], [ramp], [protocol] and [[point]]"
             )
         head = d.get("sweep", {})
         if not isinstance(head, Mapping):
@@ -214,6 +235,7 @@ class Sweep:
         return cls(
             wire=d.get("wire", {}),
             ramp=d.get("ramp", {}),
+            protocol=d.get("protocol", {}),
             points=points,
             replicas=head.get("replicas", 1),
             seed=head.get("seed", 0),
@@ -242,20 +264,32 @@ class Sweep:
         d: dict = {"sweep": {"replicas": self.replicas, "seed": self.seed}}
         d["wire"] = _thaw(self.wire)
         d["ramp"] = _thaw(self.ramp)
+        if self.protocol:
+            d["protocol"] = _thaw(self.protocol)
         if self.points:
             d["point"] = [_thaw(p) for p in self.points]
         return d
 
     # ---- expansion --------------------------------------------------------------------------
 
+    @property
+    def kind(self) -> str:
+        """The protocol: ``"ramp"`` or ``"injection"`` (``[protocol] kind``)."""
+        return self.protocol.get("kind", "ramp")
+
+    def _protocol_table(self) -> tuple[str, Mapping, tuple[str, ...]]:
+        """(table name, its entries, its known keys) of the protocol's parameters."""
+        if self.kind == "injection":
+            params = {k: v for k, v in self.protocol.items() if k != "kind"}
+            return "protocol", params, _INJECTION_KEYS
+        return "ramp", self.ramp, _RAMP_KEYS
+
     def _grid(self) -> tuple[list[_Dim], dict[str, dict]]:
         """The swept dimensions of [wire] and [ramp], and the values they fix."""
         dims: list[_Dim] = []
-        base: dict[str, dict] = {"wire": {}, "ramp": {}}
-        for table, spec, known in (
-            ("wire", self.wire, _WIRE_KEYS),
-            ("ramp", self.ramp, _RAMP_KEYS),
-        ):
+        ptable, pspec, pknown = self._protocol_table()
+        base: dict[str, dict] = {"wire": {}, ptable: {}}
+        for table, spec, known in (("wire", self.wire, _WIRE_KEYS), (ptable, pspec, pknown)):
             for key, value in spec.items():
                 _check_key(f"[{table}]", key, known)
                 if key in _TABLES:
@@ -304,7 +338,7 @@ class Sweep:
                     coords.append((d.name, d.labels[i]))
                 if self.points:
                     for key, value in self.points[p].items():
-                        table = "wire" if key in _WIRE_KEYS else "ramp"
+                        table = "wire" if key in _WIRE_KEYS else self._protocol_table()[0]
                         if isinstance(value, Mapping):
                             spec[table][key] = {**spec[table].get(key, {}), **value}
                         else:
@@ -312,8 +346,8 @@ class Sweep:
                     coords += zip(point_names, point_values[p], strict=True)
                 where = ", ".join(f"{n} = {_fmt(v)}" for n, v in coords)
                 wire, ramp = _build(spec, where)
-                lambdas.update(ramp.lambdas)
                 index = (*combo, p) if self.points else combo
+                lambdas.update(Run(wire=wire, ramp=ramp, replica=0, seed=self.seed).stages)
                 for r in range(self.replicas):
                     run = Run(
                         wire=wire,
@@ -366,7 +400,7 @@ class Sweep:
                 raise ValueError(f"{where} is empty")
             names, labels = [], []
             for key, value in point.items():
-                _check_key(f"{where}:", key, _WIRE_KEYS + _RAMP_KEYS)
+                _check_key(f"{where}:", key, _WIRE_KEYS + self._protocol_table()[2])
                 if key in _TABLES:
                     if not isinstance(value, Mapping):
                         raise ValueError(f"{where}: {key} must be a table, got {_fmt(value)}")
@@ -426,7 +460,8 @@ class Sweep:
 
     @property
     def lambdas(self) -> tuple[float, ...]:
-        """Every stage λ of every run, sorted (the ``lam`` coordinate of :func:`load`)."""
+        """Every stage λ of every run, sorted (the ``lam`` coordinate of :func:`load`); for an
+        injection, every planned injected length (the ``L_in`` coordinate)."""
         return self._plan.lambdas
 
     def runs(self) -> tuple[Run, ...]:
@@ -445,8 +480,8 @@ def _assign(spec: dict, path: tuple[str, ...], value) -> None:
         spec[table][key] = value
 
 
-def _build(spec: dict, where: str) -> tuple[Wire, Ramp]:
-    """Wire and Ramp of one parameter point, with errors naming the point."""
+def _build(spec: dict, where: str) -> tuple[Wire, Ramp | Injection]:
+    """Wire and protocol of one parameter point, with errors naming the point."""
     at = f" at {where}" if where else ""
     try:
         w = _canonical(spec["wire"])
@@ -477,6 +512,13 @@ def _build(spec: dict, where: str) -> tuple[Wire, Ramp]:
         wire = Wire.from_dict(_canonical(wire.to_dict()))
     except (ValueError, TypeError) as exc:
         raise ValueError(f"[wire]{at}: {exc}") from None
+    if "protocol" in spec:
+        try:
+            inj = Injection.from_dict(_canonical(spec["protocol"]))
+            inj.resolve(wire)  # checked against the wire before anything is submitted
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"[protocol]{at}: {exc}") from None
+        return wire, inj
     try:
         r = _canonical(spec["ramp"])
         if "lambdas" in r and "schedule" in r:

@@ -93,10 +93,12 @@ def run_id(wire: Wire, ramp: Ramp, replica: int, seed: int) -> str:
     (True, 16)
     """
     cw, cr = _canonical_params(wire, ramp)
+    # an injection's id names its protocol; a ramp's keeps the document it always had
+    table = "injection" if _is_injection(ramp) else "ramp"
     doc = {
         "schema": RUN_ID_SCHEMA,
         "wire": cw,
-        "ramp": cr,
+        table: cr,
         "replica": int(replica),
         "seed": int(seed),
     }
@@ -112,12 +114,16 @@ def run_id(wire: Wire, ramp: Ramp, replica: int, seed: int) -> str:
 ID_NEUTRAL = MappingProxyType({"wire": {"rest_angle_sd": 0.0, "cavity_radius": None}, "ramp": {}})
 
 
+def _is_injection(protocol) -> bool:
+    return type(protocol).__name__ == "Injection"
+
+
 @functools.lru_cache(maxsize=1024)
 def _canonical_params(wire: Wire, ramp: Ramp) -> tuple[dict, dict]:
     # cached: the replicas of a point share their wire and ramp (read-only results)
     out = []
     for table, params in (("wire", wire.to_dict()), ("ramp", ramp.to_dict())):
-        neutral = ID_NEUTRAL[table]
+        neutral = ID_NEUTRAL[table] if not _is_injection(ramp) or table == "wire" else {}
         out.append(_canonical({k: v for k, v in params.items()
                                if not (k in neutral and v == neutral[k])}))  # fmt: skip
     return out[0], out[1]
@@ -125,14 +131,17 @@ def _canonical_params(wire: Wire, ramp: Ramp) -> tuple[dict, dict]:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Run:
-    """One run of a sweep: a wire, a ramp, a replica index and the sweep's base seed.
+    """One run of a sweep: a wire, a protocol, a replica index and the sweep's base seed.
+
+    ``ramp`` is the protocol: a :class:`~crumple.protocol.Ramp` or an
+    :class:`~crumple.injection.Injection` (``[protocol] kind = "injection"``).
 
     ``coords`` are the values of the swept parameters at this run's point, as
     ``((name, value), ...)``; ``index`` its position on the sweep's dimensions.
     """
 
     wire: Wire
-    ramp: Ramp
+    ramp: Ramp | Any
     replica: int
     seed: int
     coords: tuple[tuple[str, Any], ...] = ()
@@ -151,9 +160,28 @@ class Run:
         """The run's random generator: ``replica_seeds(seed, n)[replica]`` for any n > replica."""
         return np.random.default_rng(replica_seeds(self.seed, self.replica + 1)[self.replica])
 
+    @property
+    def protocol(self) -> str:
+        """``"ramp"`` or ``"injection"``."""
+        return "injection" if _is_injection(self.ramp) else "ramp"
+
+    @property
+    def stages(self) -> tuple[float, ...]:
+        """The planned stage coordinates: λ of a ramp, L_in of an injection."""
+        if self.protocol == "ramp":
+            return self.ramp.lambdas
+        from ..injection_storage import planned_lengths
+
+        return tuple(planned_lengths(self.wire, self.ramp).tolist())
+
     def compute(self, progress=None):
-        """Run the ramp (:func:`crumple.protocol.run_ramp`) and return its ``RampResult``.
+        """Run the protocol (:func:`crumple.protocol.run_ramp` or
+        :func:`crumple.injection.run_injection`) and return its result.
         ``progress(i, n_stages, stage)`` after every stage, as :func:`run_ramp`'s."""
+        if self.protocol == "injection":
+            from ..injection import run_injection
+
+            return run_injection(self.wire, self.ramp, seed=self.rng(), progress=progress)
         return run_ramp(self.wire, self.ramp, seed=self.rng(), progress=progress)
 
     def to_task(self) -> dict:
@@ -161,7 +189,7 @@ class Run:
         return {
             "id": self.id,
             "wire": self.wire.to_dict(),
-            "ramp": self.ramp.to_dict(),
+            self.protocol: self.ramp.to_dict(),
             "replica": self.replica,
             "seed": self.seed,
             "coords": dict(self.coords),
@@ -171,11 +199,17 @@ class Run:
     def from_task(cls, task: Mapping) -> Run:
         return cls(
             wire=Wire.from_dict(task["wire"]),
-            ramp=Ramp.from_dict(task["ramp"]),
+            ramp=Ramp.from_dict(task["ramp"]) if "ramp" in task else _injection(task),
             replica=int(task["replica"]),
             seed=int(task["seed"]),
             coords=tuple(task.get("coords", {}).items()),
         )
+
+
+def _injection(task: Mapping):
+    from ..injection import Injection
+
+    return Injection.from_dict(task["injection"])
 
 
 # --------------------------------------------------------------------------------------------
@@ -213,6 +247,7 @@ def _manifest(sweep: Sweep) -> dict:
         "replicas": sweep.replicas,
         "dims": dims,
         "lambdas": list(sweep.lambdas),
+        "protocol": sweep.kind,
         "runs": [{"id": r.id, "replica": r.replica, "index": list(r.index)} for r in sweep.runs()],
     }
 
@@ -310,12 +345,29 @@ def _failure(path: Path) -> dict:
         return {"message": f"(unreadable failure record: {exc})"}
 
 
+def _format(h5: Path) -> str | None:
+    """The ``format`` attribute of a results file (None where it cannot be read)."""
+    import h5py
+
+    try:
+        with h5py.File(h5, "r") as f:
+            v = f.attrs.get("format")
+            return v.decode() if isinstance(v, bytes) else v
+    except OSError:
+        return None
+
+
 def _classify(out: Path, rid: str) -> tuple[str, str]:
     """("done" | "failed" | "corrupt" | "missing", detail) of one run in a store."""
     h5 = _h5(out, rid)
     if h5.exists():
         try:
-            verify_ramps(h5, run_id=rid)
+            if _format(h5) == "crumple-injections":
+                from ..injection_storage import verify_injections
+
+                verify_injections(h5, run_id=rid)
+            else:
+                verify_ramps(h5, run_id=rid)
             return "done", ""
         except ValueError as exc:
             return "corrupt", str(exc)
@@ -421,7 +473,7 @@ def _record_failure(out: Path, task: Mapping, error: str, message: str, tb: str)
         "seed": task["seed"],
         "coords": task.get("coords", {}),
         "wire": task["wire"],
-        "ramp": task["ramp"],
+        "ramp": task.get("ramp", task.get("injection")),
         "versions": versions(),
     }
     atomic_write_text(_failed(out, task["id"]), json.dumps(record, indent=2, default=str))

@@ -1,0 +1,200 @@
+"""The feeding channel of the injection protocol: its geometry and the energy of a fed wire.
+
+The cavity (radius R_c, centred at the origin) has its mouth at ``P = (R_c, 0)``. The channel
+is the straight line through P along the unit vector ``u`` (pointing into the cavity), at an
+angle α from the inward radial ``-P/R_c``. A point at channel coordinate ``t`` sits at
+``P + t u``: outside for ``t < 0``, inside the cavity for ``0 < t < 2 R_c cos α``.
+
+The wire is numbered from its tip (node 0, the first in) to its tail. Node i sits at material
+coordinate ``σ_i = i L0/N``; with a length ``L_in`` pushed in, a node still held by the
+channel sits at ``t = L_in - σ_i``. The nodes held by the channel are *prescribed* (the
+minimiser's fixed mask); the others are *free*. A prescribed node becomes free once its
+channel position lies at least the wall's barrier width d inside the wall (where the barrier
+is zero, so freeing it changes no energy); a free node never goes back.
+
+Energy of a fed wire (:class:`FedWireEnergy`): the wire's own terms (bending, stretching,
+hard core; no trap) over every node, and the cavity wall's barrier over the free nodes
+only. The prescribed nodes are the channel's business: they sit on or outside the wall, so
+the barrier would be infinite there. The joint at the last prescribed node carries the
+bending energy of the clamped feed (the angle between the channel and the first free
+segment). See ``docs/injection.md``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse as sp
+
+from .energy import EnergyTerms, WireEnergy
+from .energy_kernels import _barrier
+from .model import Wire
+
+__all__ = ["Channel", "FedWireEnergy"]
+
+
+class Channel:
+    """The straight feeding channel of a cavity: mouth, direction and the node positions it
+    prescribes.
+
+    Parameters
+    ----------
+    radius : float
+        Cavity radius R_c ``[length]``.
+    angle : float
+        Entry angle α ``[rad]`` from the inward radial, ``|α| < π/2`` (0: radial).
+
+    Examples
+    --------
+    >>> c = Channel(1.0, 0.0)
+    >>> c.mouth.tolist(), c.direction.tolist()
+    ([1.0, 0.0], [-1.0, 0.0])
+    >>> c.positions(np.array([0.0, 0.5, 2.0]), injected=1.0).tolist()
+    [[0.0, 0.0], [0.5, 0.0], [2.0, 0.0]]
+    """
+
+    def __init__(self, radius: float, angle: float = 0.0):
+        self.radius = float(radius)
+        self.angle = float(angle)
+        if not (math.isfinite(self.radius) and self.radius > 0):
+            raise ValueError(f"cavity radius must be positive, got {radius!r}")
+        if not (math.isfinite(self.angle) and abs(self.angle) < 0.5 * math.pi):
+            raise ValueError(f"entry angle must lie in (-pi/2, pi/2) rad, got {angle!r}")
+        #: P, shape (2,) ``[length]``
+        self.mouth = np.array([self.radius, 0.0])
+        #: u, the inward radial (-1, 0) turned by α, shape (2,) (+ 0.0: no negative zeros)
+        self.direction = np.array([-math.cos(self.angle), -math.sin(self.angle)]) + 0.0
+
+    def positions(self, sigma, injected: float) -> np.ndarray:
+        """Channel positions ``P + (L_in - σ) u`` of material coordinates ``sigma``, shape
+        (len(sigma), 2) ``[length]``."""
+        t = float(injected) - np.asarray(sigma, dtype=float)
+        return self.mouth[None, :] + t[:, None] * self.direction[None, :]
+
+    def chord(self) -> float:
+        """Length ``2 R_c cos α`` of the channel line inside the cavity ``[length]``."""
+        return 2.0 * self.radius * math.cos(self.angle)
+
+    def release_depth(self, width: float) -> float:
+        """The channel coordinate t at which the wall is ``width`` away: a prescribed node
+        with ``t`` at least this is released. Smallest root of ``|P + t u| = R_c - width``.
+
+        >>> round(Channel(1.0, 0.0).release_depth(0.01), 12)
+        0.01
+        """
+        r, w = self.radius, float(width)
+        if not 0 < w < r:
+            raise ValueError(f"width must lie in (0, R_c), got {width!r}")
+        c = math.cos(self.angle)
+        # t² - 2 R t cos α + R² - (R - w)² = 0
+        disc = (r * c) ** 2 - (r * r - (r - w) ** 2)
+        if disc < 0:
+            raise ValueError(
+                f"the channel at angle {self.angle} rad never lies {w} inside a cavity of "
+                f"radius {r}: entry too close to tangential"
+            )
+        return r * c - math.sqrt(disc)
+
+
+def wall_blocks(x, radius: float, width: float, strength: float):
+    """Energy, gradient and 2 × 2 Hessian blocks of the wall barrier ε Σ b((R_c - |x_i|)/d)
+    on the rows of ``x`` (shape (m, 2)); the same law as :func:`crumple.energy.cavity_energy`.
+
+    Returns ``(energy, grad (m, 2), near (k,) row indices, blocks (k, 2, 2))``; ``energy`` is
+    inf when a row is on or outside the wall.
+    """
+    r = np.hypot(x[:, 0], x[:, 1])
+    delta = radius - r
+    grad = np.zeros_like(x)
+    if np.any(delta <= 0):
+        return math.inf, grad, np.zeros(0, dtype=np.int64), np.zeros((0, 2, 2))
+    near = np.flatnonzero(delta < width)
+    e = 0.0
+    blocks = np.zeros((near.size, 2, 2))
+    for m, i in enumerate(near):
+        b, db, d2b = _barrier(delta[i] / width)
+        e += strength * b
+        n = x[i] / r[i]
+        grad[i] = -strength * db / width * n
+        c2 = strength * d2b / width**2
+        c1 = -strength * db / (width * r[i])
+        blocks[m] = c2 * np.outer(n, n) + c1 * (np.eye(2) - np.outer(n, n))
+    return float(e), grad, near, blocks
+
+
+class FedWireEnergy:
+    """Energy of a wire fed through a channel: :class:`crumple.energy.WireEnergy` without its
+    trap and wall, plus the wall over the ``free`` nodes only. A minimiser's callable, as
+    ``WireEnergy``: ``energy(x) -> (E, grad)``, ``energy.hessian(x)``, ``energy.terms(x)``.
+
+    Parameters
+    ----------
+    wire : Wire
+        Must have a cavity (``cavity_radius``).
+    free : array_like of bool, shape (wire.n_nodes,)
+        The nodes the wall acts on (those inside, not held by the channel).
+    rest_angles : array_like, optional
+        As for ``WireEnergy``.
+    """
+
+    def __init__(self, wire: Wire, free, *, rest_angles=None):
+        if wire.cavity_radius is None:
+            raise ValueError("a fed wire needs a cavity (cavity_radius)")
+        self.wire = wire
+        self.free = np.asarray(free, dtype=bool)
+        self._free_idx = np.flatnonzero(self.free)
+        self.inner = WireEnergy(wire.replace(cavity_radius=None), 0.0, rest_angles=rest_angles)
+        self._lookup = None
+
+    def _wall(self, x):
+        xf = x[self._free_idx]
+        w = self.wire
+        return wall_blocks(xf, w.cavity_radius, w.hard_core, w.hard_core_energy)
+
+    def __call__(self, x):
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        e, g = self.inner(x)
+        ew, gw, _, _ = self._wall(x)
+        if not math.isfinite(ew):
+            return math.inf, g
+        g = g.copy()
+        g[self._free_idx] += gw
+        return e + ew, g
+
+    def terms(self, x) -> EnergyTerms:
+        t = self.inner.terms(x)
+        ew = self._wall(np.ascontiguousarray(x, dtype=np.float64))[0]
+        return EnergyTerms(t.bending, t.stretching, t.confinement, t.hard_core, wall=ew)
+
+    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
+        """The Hessian of ``WireEnergy`` plus the wall's (positive semi-definite) blocks."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        h = self.inner.hessian(x, dense=dense, project_contacts=project_contacts)
+        _, _, near, blocks = self._wall(x)
+        nodes = self._free_idx[near]
+        if nodes.size == 0:
+            return h
+        rows = (2 * nodes[:, None, None] + np.arange(2)[None, :, None]).repeat(2, axis=2)
+        cols = rows.transpose(0, 2, 1)
+        if not sp.issparse(h):
+            np.add.at(h, (rows.ravel(), cols.ravel()), blocks.ravel())
+            return h
+        # the node's own 2 × 2 block is in the pattern (stretching): add into the data
+        at = _csc_positions(h, rows.ravel(), cols.ravel())
+        data = h.data.copy()
+        np.add.at(data, at, blocks.ravel())
+        return sp.csc_matrix((data, h.indices, h.indptr), shape=h.shape, copy=False)
+
+
+def _csc_positions(h, rows, cols) -> np.ndarray:
+    """Index into ``h.data`` of the stored entries (rows, cols) of a CSC matrix whose row
+    indices are sorted within each column."""
+    out = np.empty(rows.size, dtype=np.int64)
+    for k, (r, c) in enumerate(zip(rows, cols, strict=True)):
+        lo, hi = h.indptr[c], h.indptr[c + 1]
+        j = lo + int(np.searchsorted(h.indices[lo:hi], r))
+        if j >= hi or h.indices[j] != r:
+            raise RuntimeError(f"entry ({r}, {c}) is not in the Hessian's pattern")
+        out[k] = j
+    return out
