@@ -322,3 +322,85 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
             seed=SEED,
         ),
     }
+
+
+# --------------------------------------------------------------------------------------------
+# The paper's minimiser given a fair chance (issue 14, item 3): its own study, `--profile powell`
+# --------------------------------------------------------------------------------------------
+
+#: Sweeps per stage at most: Numerical Recipes' ``powell`` (the code the paper's "Powell's
+#: algorithm" most likely was, in 2011) stops with an error after ITMAX = 200 iterations, so a
+#: stage the paper kept ended within 200 sweeps (docs/reproduction.md, "The paper's minimiser").
+POWELL_ITMAX = 200
+#: NR's stopping rule ``ftol`` (a sweep lowering E by less than this fraction ends the stage):
+#: 1e-6, the value of NR's own example (the paper gives none), and 0 (never: the whole ITMAX
+#: budget at every stage, the most the stock code allows).
+POWELL_RTOLS = (1e-6, 0.0)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PowellProfile:
+    """How much the Powell study runs: ``replicas`` ramps of the Fig. 2 wire per stopping rule
+    (:data:`POWELL_RTOLS`) with ``sweeps`` Powell sweeps per stage at most, over
+    ``schedule_n`` geometric stages (plus the paper's four), and the same replicas with Newton
+    (same seeds, so the same initial wire)."""
+
+    name: str
+    description: str
+    replicas: int
+    schedule_n: int
+    sweeps: int
+    rtols: tuple[float, ...]
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+POWELL_PROFILES: MappingProxyType[str, PowellProfile] = MappingProxyType(
+    {
+        "full": PowellProfile(
+            name="full",
+            description="the paper's 10 replicas of the Fig. 2 wire, 44 λ stages, Powell with "
+            f"at most {POWELL_ITMAX} sweeps per stage (NR's ITMAX) under two stopping rules",
+            replicas=10,
+            schedule_n=40,
+            sweeps=POWELL_ITMAX,
+            rtols=POWELL_RTOLS,
+        ),
+        "smoke": PowellProfile(
+            name="smoke",
+            description="SMOKE PROFILE (tests only): 2 replicas, 7 λ stages, 2 sweeps per "
+            "stage; the numbers mean nothing",
+            replicas=2,
+            schedule_n=3,
+            sweeps=2,
+            rtols=POWELL_RTOLS,
+        ),
+    }
+)
+
+
+def build_powell_sweeps(profile: PowellProfile | str) -> dict[str, Sweep]:
+    """The Powell study's sweeps: ``powell_paper`` (Powell, one point per stopping rule) and
+    ``newton_fig2`` (Newton, the same wire, schedule, replicas and seed)."""
+    if isinstance(profile, str):
+        if profile not in POWELL_PROFILES:
+            raise ValueError(
+                f"unknown profile {profile!r}; choose one of {', '.join(POWELL_PROFILES)}"
+            )
+        profile = POWELL_PROFILES[profile]
+    kb, ks = FIG2
+    wire = {"k_b": kb, "k_s": ks, "confinement": CONFINEMENT}
+    sched = list(default_schedule(n=profile.schedule_n))
+    return {
+        "powell_paper": Sweep(
+            wire=wire,
+            ramp={"lambdas": sched, "method": "powell", "maxiter": profile.sweeps},
+            points=[{"powell_rtol": float(r)} for r in profile.rtols],
+            replicas=profile.replicas,
+            seed=SEED,
+        ),
+        "newton_fig2": Sweep(
+            wire=wire, ramp={"lambdas": sched}, replicas=profile.replicas, seed=SEED
+        ),
+    }

@@ -131,7 +131,8 @@ class Sweep:
         ``k_b = 5``, ``k_s = 5e5`` as ``crumple run``.
     ramp : mapping
         Parameters of :class:`crumple.protocol.Ramp` (``lambdas``, ``initial_noise``,
-        ``stage_noise``, ``stop_tol``, ``method``, ``ftol``, ``maxiter``, ``max_step``), or
+        ``stage_noise``, ``stop_tol``, ``method``, ``ftol``, ``maxiter``, ``max_step``,
+        ``powell_rtol``), or
         ``schedule = {lam_min, lam_max, n}`` for :func:`crumple.protocol.default_schedule`.
     points : sequence of mappings
         Explicit parameter points (wire and ramp keys mixed; each point sets the same keys),
