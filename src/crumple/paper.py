@@ -72,6 +72,12 @@ CONFINEMENT = "per-length"
 SEED = 20070101
 
 
+#: Sweeps per stage at most: Numerical Recipes' ``powell`` (the code the paper's "Powell's
+#: algorithm" most likely was, in 2011) stops with an error after ITMAX = 200 iterations, so a
+#: stage the paper kept ended within 200 sweeps (docs/reproduction.md, "The paper's minimiser").
+POWELL_ITMAX = 200
+
+
 @dataclass(frozen=True, slots=True)
 class PaperValue:
     """One number of the paper: what it is, its value and the sentence it comes from."""
@@ -179,7 +185,9 @@ class Profile:
     ``schedule_n`` is the number of geometric stages from 1 to 2000 (the paper's 70, 200, 300
     and 1000 are always added, see :func:`crumple.protocol.default_schedule`). Powell is slow
     (docs/performance.md) and runs a reduced subset: ``powell_replicas`` replicas of the Fig. 2
-    wire, ``powell_schedule_n`` stages, ``powell_sweeps`` Powell iterations per stage.
+    wire, ``powell_schedule_n`` stages, ``powell_sweeps`` Powell iterations per stage (the full
+    profile: NR's ITMAX = 200, :data:`POWELL_ITMAX`; the Powell study, ``--profile powell``,
+    runs more replicas and both stopping rules).
     """
 
     name: str
@@ -208,9 +216,9 @@ PROFILES: MappingProxyType[str, Profile] = MappingProxyType(
             disorder_replicas=10,
             powell_replicas=2,
             powell_schedule_n=40,
-            powell_sweeps=20,
-            description="the paper's 10 replicas everywhere (Powell: 2 replicas, 20 sweeps "
-            "per stage)",
+            powell_sweeps=POWELL_ITMAX,
+            description="the paper's 10 replicas everywhere (Powell: 2 replicas, 200 sweeps "
+            "per stage, NR's ITMAX)",
         ),
         "quick": Profile(
             name="quick",
@@ -221,9 +229,9 @@ PROFILES: MappingProxyType[str, Profile] = MappingProxyType(
             disorder_replicas=3,
             powell_replicas=1,
             powell_schedule_n=12,
-            powell_sweeps=5,
+            powell_sweeps=20,
             description="QUICK PROFILE: 2 replicas (3 with rest-angle disorder), 20 λ stages, "
-            "3 θ_p values in the Fig. 6 inset, Powell 1 replica × 16 stages × 5 sweeps; "
+            "3 θ_p values in the Fig. 6 inset, Powell 1 replica × 16 stages × 20 sweeps; "
             "numbers are indicative, run `crumple reproduce` for the full profile",
         ),
         "smoke": Profile(
@@ -328,10 +336,6 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
 # The paper's minimiser given a fair chance (issue 14, item 3): its own study, `--profile powell`
 # --------------------------------------------------------------------------------------------
 
-#: Sweeps per stage at most: Numerical Recipes' ``powell`` (the code the paper's "Powell's
-#: algorithm" most likely was, in 2011) stops with an error after ITMAX = 200 iterations, so a
-#: stage the paper kept ended within 200 sweeps (docs/reproduction.md, "The paper's minimiser").
-POWELL_ITMAX = 200
 #: NR's stopping rule ``ftol`` (a sweep lowering E by less than this fraction ends the stage):
 #: 1e-6, the value of NR's own example (the paper gives none), and 0 (never: the whole ITMAX
 #: budget at every stage, the most the stock code allows).
@@ -360,9 +364,10 @@ POWELL_PROFILES: MappingProxyType[str, PowellProfile] = MappingProxyType(
     {
         "full": PowellProfile(
             name="full",
-            description="the paper's 10 replicas of the Fig. 2 wire, 44 λ stages, Powell with "
-            f"at most {POWELL_ITMAX} sweeps per stage (NR's ITMAX) under two stopping rules",
-            replicas=10,
+            description="5 replicas of the Fig. 2 wire (the paper ran 10; 5 fit the time of a "
+            f"shared 2-core machine), 44 λ stages, Powell with at most {POWELL_ITMAX} sweeps per "
+            "stage (NR's ITMAX) under two stopping rules",
+            replicas=5,
             schedule_n=40,
             sweeps=POWELL_ITMAX,
             rtols=POWELL_RTOLS,
@@ -396,7 +401,9 @@ def build_powell_sweeps(profile: PowellProfile | str) -> dict[str, Sweep]:
         "powell_paper": Sweep(
             wire=wire,
             ramp={"lambdas": sched, "method": "powell", "maxiter": profile.sweeps},
-            points=[{"powell_rtol": float(r)} for r in profile.rtols],
+            # two keys per point, so the store has a "point" dimension (one key would make
+            # powell_rtol the dimension); maxiter is the ramp's own, so run ids do not change
+            points=[{"powell_rtol": float(r), "maxiter": profile.sweeps} for r in profile.rtols],
             replicas=profile.replicas,
             seed=SEED,
         ),

@@ -257,11 +257,16 @@ def _powell_loop(x, direc, steps, prepare, evaluate, admissible, params, maxiter
 
 
 def _compiled(names):
-    """Numba copies of the functions ``names`` that call each other's copies (same code)."""
+    """Numba copies of the functions ``names`` that call each other's copies (same code).
+
+    Not cached on disk: a cached function whose arguments are other compiled functions can
+    come back from Numba's cache holding a dead reference to them ("ReferenceError:
+    underlying object has vanished", seen in Dask workers); compiling costs ~10 s once per
+    process."""
     space = dict(globals())
     for name in names:
         f = space[name]
-        space[name] = njit(cache=True)(types.FunctionType(f.__code__, space, name, f.__defaults__))
+        space[name] = njit(types.FunctionType(f.__code__, space, name, f.__defaults__))
     return space[names[-1]]
 
 

@@ -20,6 +20,7 @@ from .curves import (
     plot_radius,
 )
 from .loops import plot_loop_count, plot_loop_shape
+from .powell import plot_powell_study
 
 __all__ = [
     "plot_alternatives",
@@ -31,6 +32,7 @@ __all__ = [
     "plot_mass_size",
     "plot_minimizer",
     "plot_plasticity",
+    "plot_powell_study",
     "plot_radius",
     "ramp_animation",
 ]

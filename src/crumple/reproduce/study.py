@@ -64,8 +64,9 @@ PAPER = Study(
 
 def _studies() -> dict[str, Study]:
     from .continuum import CONTINUUM
+    from .powell_study import POWELL_STUDY
 
-    return {"continuum": CONTINUUM}
+    return {"continuum": CONTINUUM, "powell": POWELL_STUDY}
 
 
 def get(name: str) -> Study:
@@ -77,4 +78,4 @@ def get(name: str) -> Study:
 
 
 #: The names of the studies ``crumple study`` runs (the paper's is ``crumple reproduce``).
-STUDIES = ("continuum",)
+STUDIES = ("continuum", "powell")
