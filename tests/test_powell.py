@@ -205,3 +205,6 @@ def test_powell_study_smoke_report(tmp_path):
     assert {a["variant"] for a in res["alternatives"]} == set(mins)
     md = (out / "report.md").read_text()
     assert "SMOKE PROFILE" in md and "Powell" in md
+    (out / "report.md").unlink()
+    assert main(["figures", str(out), "--quiet"]) == 0  # `crumple figures` knows the study
+    assert (out / "report.md").read_text() == md

@@ -155,7 +155,23 @@ def _reproduce_powell(args) -> int:
 def _cmd_figures(args) -> int:
     if not Path(args.path).is_dir():
         raise CLIError(f"no such reproduction directory: {args.path}")
-    return _finish_report(args.path, args.quiet)
+    return _finish_report(args.path, args.quiet, study=_stored_study(Path(args.path)))
+
+
+def _stored_study(path: Path):
+    """The Powell study if ``path`` holds its profile (``--profile powell``), else None (the
+    paper's reproduction)."""
+    import json
+
+    from ..paper import PowellProfile
+    from ..reproduce.study import get
+
+    try:
+        prof = json.loads((path / "profile.json").read_text(encoding="utf-8"))["profile"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None  # the paper's reader says what is wrong
+    fields = set(PowellProfile.__dataclass_fields__)
+    return get("powell") if isinstance(prof, dict) and fields <= set(prof) else None
 
 
 def _add_cluster_flags(p) -> None:
