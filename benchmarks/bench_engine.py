@@ -3,7 +3,7 @@
     python benchmarks/bench_engine.py            # everything (a few minutes)
     python benchmarks/bench_engine.py energy     # energy + gradient per node against N
     python benchmarks/bench_engine.py ramp       # the default ramp, N = 100
-    python benchmarks/bench_engine.py solvers    # Newton vs NR Powell (compiled) and L-BFGS-B, one stage
+    python benchmarks/bench_engine.py solvers    # Newton vs NR Powell, L-BFGS-B, one stage
     python benchmarks/bench_engine.py ramp1000   # a full ramp at N = 1000
 
 Run on an otherwise idle machine; numbers are medians of repeats, after JIT warm-up.
