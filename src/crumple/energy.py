@@ -44,6 +44,9 @@ from .energy_kernels import (
     _elastic_eg,
     _hard_core_eg,
     _hessian_triplets,
+    _line_admissible,
+    _line_energy,
+    _line_prepare,
     _max_displacement,
     _total_eg,
     _wall_eg,
@@ -381,6 +384,28 @@ class WireEnergy:
             raise ValueError(f"positions must have {self.wire.n_nodes} nodes, got {x.shape[0]}")
         self._eg(x)
         return EnergyTerms(*(float(v) for v in self._terms))
+
+    def line_kernels(self, reach: float) -> tuple:
+        """The compiled energy along a line, for :func:`crumple.minimize.powell` (``compiled=``).
+
+        Returns ``(prepare, evaluate, admissible, params)``: Numba functions with the protocol
+        of :mod:`crumple.powell` and their parameters. ``evaluate(x, d, t, ...)`` is
+        this energy at ``x + t d`` (flat coordinates), equal to ``self(x)[0]``; ``prepare``
+        bounds t so that no node moves further than ``reach`` ``[length]`` and no node touches
+        a segment on the way (continuous collision detection); ``admissible`` is the exact
+        crossing test (conservative where floating point cannot decide). No cavity.
+        """
+        w = self.wire
+        if w.cavity_radius is not None:
+            raise ValueError("the compiled line energy has no cavity wall; use the Python path")
+        if not (math.isfinite(reach) and reach > 0):
+            raise ValueError(f"reach must be a positive length, got {reach!r}")
+        params = (
+            float(w.k_b), float(self._s), float(self._tp), self.rest_angles, float(w.k_s),
+            float(w.rest_length), self.lam, self.weights, float(w.trap_center[0]),
+            float(w.trap_center[1]), float(w.hard_core), float(w.hard_core_energy), float(reach),
+        )  # fmt: skip
+        return _line_prepare, _line_energy, _line_admissible, params
 
     def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False,
                 project_bending: bool = False):  # fmt: skip

@@ -16,8 +16,9 @@ caller keeps the iterates admissible: ``step_limit(x, p)`` (the largest safe fra
 step, e.g. continuous collision detection) and ``feasible(x)`` (an exact test of an accepted
 point). An accepted step never raises the energy beyond its floating-point resolution.
 
-:func:`powell` wraps SciPy's derivative-free Powell method with a seeded random set of
-initial directions, the method of the paper; it is reported on the same criterion.
+:func:`powell` is Numerical Recipes' derivative-free Powell method from a seeded random set of
+initial directions, the method of the paper (:mod:`crumple.powell`, compiled when the
+caller gives a compiled energy along a line); it is reported on the same criterion.
 """
 
 from __future__ import annotations
@@ -29,7 +30,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.optimize import minimize as _scipy_minimize
 
 from .linalg import LDLT
 
@@ -592,93 +592,5 @@ def resolution(energy: float) -> float:
     return max(16.0 * _EPS * abs(energy), 1e-300)
 
 
-def random_directions(n: int, rng: np.random.Generator) -> np.ndarray:
-    """A random orthonormal basis of R^n (Haar-distributed), one direction per row.
-
-    >>> q = random_directions(4, np.random.default_rng(0))
-    >>> bool(np.allclose(q @ q.T, np.eye(4)))
-    True
-    """
-    a = rng.standard_normal((n, n))
-    q, r = np.linalg.qr(a)
-    return (q * np.sign(np.diag(r))).T
-
-
-def powell(
-    energy: Callable[[np.ndarray], float],
-    x0,
-    *,
-    rng: np.random.Generator,
-    gradient: Callable[[np.ndarray], np.ndarray] | None = None,
-    feasible: Callable[[np.ndarray], bool] | None = None,
-    ftol: float = 1e-6,
-    maxiter: int = 50,
-    maxfev: int | None = None,
-    xtol: float = 1e-10,
-) -> MinimizeResult:
-    """The paper's method: SciPy's Powell with a random initial set of search directions.
-
-    Inadmissible points (``feasible(x)`` false) get energy +inf, so Powell's line searches
-    never step onto them. Powell uses no gradient; ``gradient`` (if given) is used once at the
-    end to report the largest force, and ``converged`` means the same as for :func:`newton`:
-    ``max_force <= ftol``. Powell's own stopping reason is kept in ``message``.
-
-    Parameters
-    ----------
-    energy : callable
-        ``energy(x) -> float``.
-    x0 : array_like, shape (n, dim) or (n,)
-    rng : numpy.random.Generator
-        Source of the random directions.
-    gradient : callable, optional
-        ``gradient(x) -> array`` of the shape of ``x``, for the report.
-    ftol : float
-        Force tolerance of the report (as in :func:`newton`).
-    maxiter, maxfev : int
-        Powell's iteration and evaluation limits.
-    xtol : float
-        Powell's line-search tolerance.
-
-    Examples
-    --------
-    >>> f = lambda x: float((x[0] - 1) ** 2 + 10 * (x[1] + 2) ** 2)
-    >>> g = lambda x: np.array([2 * (x[0] - 1), 20 * (x[1] + 2)])
-    >>> r = powell(f, [0.0, 0.0], rng=np.random.default_rng(1), gradient=g)
-    >>> r.converged, np.round(r.x, 6).tolist()
-    (True, [1.0, -2.0])
-    """
-    x = _validate_common(x0, ftol, maxiter)
-    shape = x.shape
-    nfev = 0
-
-    def f(flat):
-        nonlocal nfev
-        nfev += 1
-        y = flat.reshape(shape)
-        if feasible is not None and not feasible(y):
-            return math.inf
-        return energy(y)
-
-    direc = random_directions(x.size, rng)
-    opts = {"direc": direc, "maxiter": int(maxiter), "xtol": xtol, "ftol": 1e-14}
-    if maxfev is not None:
-        opts["maxfev"] = int(maxfev)
-    # Brent's parabolic step meets inf - inf at an inadmissible point and falls back to a
-    # golden-section step; the NaN it computes on the way is expected, not an error
-    with np.errstate(invalid="ignore", over="ignore"):
-        res = _scipy_minimize(f, x.ravel(), method="Powell", options=opts)
-    xf = np.asarray(res.x, dtype=np.float64).reshape(shape)
-    ef = energy(xf)
-    fmax = max_force(gradient(xf)) if gradient is not None else math.nan
-    return MinimizeResult(
-        x=xf,
-        energy=float(ef),
-        max_force=fmax,
-        iterations=int(res.nit),
-        evaluations=nfev,
-        hessian_evaluations=0,
-        converged=bool(fmax <= ftol),
-        ftol=ftol,
-        message=f"powell: {res.message}",
-        method="powell",
-    )
+# Powell's method lives in its own module; imported last (it uses MinimizeResult from here)
+from .powell import powell, random_directions  # noqa: E402

@@ -72,6 +72,12 @@ CONFINEMENT = "per-length"
 SEED = 20070101
 
 
+#: Sweeps per stage at most: Numerical Recipes' ``powell`` (the code the paper's "Powell's
+#: algorithm" most likely was, in 2011) stops with an error after ITMAX = 200 iterations, so a
+#: stage the paper kept ended within 200 sweeps (docs/reproduction.md, "The paper's minimiser").
+POWELL_ITMAX = 200
+
+
 @dataclass(frozen=True, slots=True)
 class PaperValue:
     """One number of the paper: what it is, its value and the sentence it comes from."""
@@ -179,7 +185,9 @@ class Profile:
     ``schedule_n`` is the number of geometric stages from 1 to 2000 (the paper's 70, 200, 300
     and 1000 are always added, see :func:`crumple.protocol.default_schedule`). Powell is slow
     (docs/performance.md) and runs a reduced subset: ``powell_replicas`` replicas of the Fig. 2
-    wire, ``powell_schedule_n`` stages, ``powell_sweeps`` Powell iterations per stage.
+    wire, ``powell_schedule_n`` stages, ``powell_sweeps`` Powell iterations per stage (the full
+    profile: NR's ITMAX = 200, :data:`POWELL_ITMAX`; the Powell study, ``--profile powell``,
+    runs more replicas and both stopping rules).
     """
 
     name: str
@@ -208,9 +216,9 @@ PROFILES: MappingProxyType[str, Profile] = MappingProxyType(
             disorder_replicas=10,
             powell_replicas=2,
             powell_schedule_n=40,
-            powell_sweeps=20,
-            description="the paper's 10 replicas everywhere (Powell: 2 replicas, 20 sweeps "
-            "per stage)",
+            powell_sweeps=POWELL_ITMAX,
+            description="the paper's 10 replicas everywhere (Powell: 2 replicas, 200 sweeps "
+            "per stage, NR's ITMAX)",
         ),
         "quick": Profile(
             name="quick",
@@ -221,9 +229,9 @@ PROFILES: MappingProxyType[str, Profile] = MappingProxyType(
             disorder_replicas=3,
             powell_replicas=1,
             powell_schedule_n=12,
-            powell_sweeps=5,
+            powell_sweeps=20,
             description="QUICK PROFILE: 2 replicas (3 with rest-angle disorder), 20 λ stages, "
-            "3 θ_p values in the Fig. 6 inset, Powell 1 replica × 16 stages × 5 sweeps; "
+            "3 θ_p values in the Fig. 6 inset, Powell 1 replica × 16 stages × 20 sweeps; "
             "numbers are indicative, run `crumple reproduce` for the full profile",
         ),
         "smoke": Profile(
@@ -320,5 +328,86 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
             ramp={"lambdas": powell_sched, "method": "powell", "maxiter": profile.powell_sweeps},
             replicas=profile.powell_replicas,
             seed=SEED,
+        ),
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# The paper's minimiser given a fair chance (issue 14, item 3): its own study, `--profile powell`
+# --------------------------------------------------------------------------------------------
+
+#: NR's stopping rule ``ftol`` (a sweep lowering E by less than this fraction ends the stage):
+#: 1e-6, the value of NR's own example (the paper gives none), and 0 (never: the whole ITMAX
+#: budget at every stage, the most the stock code allows).
+POWELL_RTOLS = (1e-6, 0.0)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PowellProfile:
+    """How much the Powell study runs: ``replicas`` ramps of the Fig. 2 wire per stopping rule
+    (:data:`POWELL_RTOLS`) with ``sweeps`` Powell sweeps per stage at most, over
+    ``schedule_n`` geometric stages (plus the paper's four), and the same replicas with Newton
+    (same seeds, so the same initial wire)."""
+
+    name: str
+    description: str
+    replicas: int
+    schedule_n: int
+    sweeps: int
+    rtols: tuple[float, ...]
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+POWELL_PROFILES: MappingProxyType[str, PowellProfile] = MappingProxyType(
+    {
+        "full": PowellProfile(
+            name="full",
+            description="5 replicas of the Fig. 2 wire (the paper ran 10; 5 fit the time of a "
+            f"shared 2-core machine), 44 λ stages, Powell with at most {POWELL_ITMAX} sweeps per "
+            "stage (NR's ITMAX) under two stopping rules",
+            replicas=5,
+            schedule_n=40,
+            sweeps=POWELL_ITMAX,
+            rtols=POWELL_RTOLS,
+        ),
+        "smoke": PowellProfile(
+            name="smoke",
+            description="SMOKE PROFILE (tests only): 2 replicas, 7 λ stages, 2 sweeps per "
+            "stage; the numbers mean nothing",
+            replicas=2,
+            schedule_n=3,
+            sweeps=2,
+            rtols=POWELL_RTOLS,
+        ),
+    }
+)
+
+
+def build_powell_sweeps(profile: PowellProfile | str) -> dict[str, Sweep]:
+    """The Powell study's sweeps: ``powell_paper`` (Powell, one point per stopping rule) and
+    ``newton_fig2`` (Newton, the same wire, schedule, replicas and seed)."""
+    if isinstance(profile, str):
+        if profile not in POWELL_PROFILES:
+            raise ValueError(
+                f"unknown profile {profile!r}; choose one of {', '.join(POWELL_PROFILES)}"
+            )
+        profile = POWELL_PROFILES[profile]
+    kb, ks = FIG2
+    wire = {"k_b": kb, "k_s": ks, "confinement": CONFINEMENT}
+    sched = list(default_schedule(n=profile.schedule_n))
+    return {
+        "powell_paper": Sweep(
+            wire=wire,
+            ramp={"lambdas": sched, "method": "powell", "maxiter": profile.sweeps},
+            # two keys per point, so the store has a "point" dimension (one key would make
+            # powell_rtol the dimension); maxiter is the ramp's own, so run ids do not change
+            points=[{"powell_rtol": float(r), "maxiter": profile.sweeps} for r in profile.rtols],
+            replicas=profile.replicas,
+            seed=SEED,
+        ),
+        "newton_fig2": Sweep(
+            wire=wire, ramp={"lambdas": sched}, replicas=profile.replicas, seed=SEED
         ),
     }

@@ -87,6 +87,15 @@ def default_schedule(
     return tuple(sorted(values))
 
 
+#: Powell: the longest move of a node in one line search, in segment lengths (the interval its
+#: continuous collision detection and its neighbour list cover).
+POWELL_REACH = 0.25
+#: Powell: the first trial step of each line search, in segment lengths (then twice the last).
+POWELL_STEP = 1e-3
+#: Powell: NR's stopping rule by default, a sweep lowering the energy by less than this fraction
+#: ends the stage (Numerical Recipes' example uses 1e-6; ours lets ``maxiter`` decide).
+POWELL_RTOL = 1e-12
+
 #: ``Ramp.maxiter``'s default per method: Newton iterations, Powell sweeps per stage.
 DEFAULT_MAXITER = {"newton": 5000, "powell": 20}
 
@@ -118,12 +127,17 @@ class Ramp:
         id hold the number: 5000 for Newton (a snap-through of an imperfect wire can take ~1300
         Newton iterations through a region of negative curvature, measured; the perfect
         default ramp needs at most ~350 per stage); 20 for Powell, whose iteration is a sweep
-        over all 2N directions (~4 s per stage at N = 100: 5000 would run for hours).
+        of line searches along all 2N directions (compiled: ~0.5 s per stage at N = 100;
+        Numerical Recipes' code, the paper's likely one, allows at most 200).
     max_step : float
         Largest node displacement per Newton step ``[length]``: the largest trust radius of
         :func:`crumple.minimize.newton`, which adapts below it. A length, independent of N
         (before issue 9 it was in units of the segment length, which made the number of
         steps grow as N). Default 0.5 L0: effectively the adaptive radius alone.
+    powell_rtol : float or None
+        Powell only: Numerical Recipes' stopping rule, a sweep lowering the energy by less than
+        this fraction ends the stage (0: always ``maxiter`` sweeps). Default (None): resolved
+        here to :data:`POWELL_RTOL` for Powell; None for Newton (and then not in the run id).
 
     Examples
     --------
@@ -143,10 +157,20 @@ class Ramp:
     ftol: float = 1e-6
     maxiter: int | None = None
     max_step: float = 0.5
+    powell_rtol: float | None = None
 
     def __post_init__(self):
         if self.maxiter is None and self.method in DEFAULT_MAXITER:
             object.__setattr__(self, "maxiter", DEFAULT_MAXITER[self.method])
+        if self.method == "powell" and self.powell_rtol is None:
+            object.__setattr__(self, "powell_rtol", POWELL_RTOL)
+        if self.method != "powell" and self.powell_rtol is not None:
+            raise ValueError("powell_rtol is a parameter of method='powell' only")
+        if self.powell_rtol is not None:
+            r = float(self.powell_rtol)
+            if not (math.isfinite(r) and r >= 0):
+                raise ValueError(f"powell_rtol must be >= 0, got {self.powell_rtol!r}")
+            object.__setattr__(self, "powell_rtol", r)
         try:
             lams = tuple(float(v) for v in self.lambdas)
         except (TypeError, ValueError):
@@ -286,15 +310,19 @@ def minimize_wire(
     rng: np.random.Generator | None = None,
     rest_angles=None,
     fixed=None,
+    rtol: float | None = None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
     Newton: every step is limited by continuous collision detection
     (:func:`crumple.geometry.max_safe_fraction`) and every accepted configuration is checked
-    by the exact crossing test, so the wire cannot pass through itself. Powell: crossing
-    configurations get energy +inf. With a cavity (``wire.cavity_radius``) the steps are also
-    limited so that no node reaches the wall (:func:`crumple.geometry.disc_exit_fraction`), and
-    a configuration with a node on or outside it is never accepted.
+    by the exact crossing test, so the wire cannot pass through itself. Powell: each line
+    search only looks along the part of its line that the same collision detection allows
+    (no node moves further than :data:`POWELL_REACH` segments), and the point it ends at is
+    taken only if it passes the crossing test; compiled (Numba) without a cavity. With a
+    cavity (``wire.cavity_radius``) the steps are also limited so that no node reaches the wall
+    (:func:`crumple.geometry.disc_exit_fraction`), and a configuration with a node on or
+    outside it is never accepted.
 
     Parameters
     ----------
@@ -316,6 +344,9 @@ def minimize_wire(
     fixed : array_like of bool, shape (wire.n_nodes,), optional
         Nodes held at their starting positions (Newton only): a clamped end is its two end
         nodes. With any node fixed, no rigid motion is a zero mode.
+    rtol : float, optional
+        Powell: NR's stopping rule (a sweep lowering the energy by less than this fraction
+        ends the stage); default :data:`POWELL_RTOL`.
 
     Examples
     --------
@@ -370,14 +401,20 @@ def minimize_wire(
     if method == "powell":
         if rng is None:
             raise ValueError("Powell needs a random generator for its directions (rng=...)")
+        reach = POWELL_REACH * wire.rest_length
         return powell(
             lambda x: energy(x)[0],
             x0,
             rng=rng,
             gradient=lambda x: energy(x)[1],
             feasible=feasible,
+            step_limit=_step_limit(radius),
+            compiled=energy.line_kernels(reach) if radius is None else None,
             ftol=ftol,
+            rtol=POWELL_RTOL if rtol is None else rtol,
             maxiter=maxiter,
+            step=POWELL_STEP * wire.rest_length,
+            reach=reach,
         )
     raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
 
@@ -488,6 +525,7 @@ def _run_ramp(wire, ramp, rng, progress):
             max_step=ramp.max_step,
             rng=rng,
             rest_angles=rest,
+            rtol=ramp.powell_rtol,
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x

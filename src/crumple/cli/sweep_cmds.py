@@ -104,12 +104,12 @@ def _cmd_reproduce(args) -> int:
     from ..reproduce import run
 
     profile = "quick" if args.quick else args.profile
+    if profile == "powell":  # the paper's minimiser given a fair chance: a study of its own
+        return _reproduce_powell(args)
     if profile not in PROFILES:
-        raise CLIError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
-    if args.workers is not None and args.workers < 1:
-        raise CLIError(f"--workers must be >= 1, got {args.workers}")
-    if args.workers is not None and args.scheduler is not None:
-        raise CLIError("--workers starts local workers; with --scheduler the cluster has its own")
+        raise CLIError(f"unknown profile {profile!r}; choose one of "
+                       f"{', '.join((*PROFILES, 'powell'))}")  # fmt: skip
+    _check_cluster_flags(args)
     out = args.out or ("crumple-report-quick" if profile == "quick" else "crumple-report")
     if not args.quiet:
         n = sum(len(s) for s in build_sweeps(profile).values())
@@ -124,10 +124,54 @@ def _cmd_reproduce(args) -> int:
     return _finish_report(out, args.quiet, summary, display)
 
 
+def _check_cluster_flags(args) -> None:
+    if args.workers is not None and args.workers < 1:
+        raise CLIError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CLIError("--workers starts local workers; with --scheduler the cluster has its own")
+
+
+def _reproduce_powell(args) -> int:
+    """``crumple reproduce --profile powell``: the Powell study's full profile
+    (:data:`crumple.reproduce.powell_study.POWELL_STUDY`, also ``crumple study powell``)."""
+    from ..reproduce import run
+    from ..reproduce.study import get
+
+    _check_cluster_flags(args)
+    study = get("powell")
+    out = args.out or "crumple-report-powell"
+    if not args.quiet:
+        print(f"crumple reproduce: profile powell ({study.command}), into {out} (resumable: "
+              "rerun the same line to continue)", file=sys.stderr)  # fmt: skip
+    display = JobProgress(args.quiet)
+    try:
+        summary = run(out, "full", workers=args.workers, scheduler=args.scheduler,
+                      progress=None if args.quiet else display, study=study)  # fmt: skip
+    finally:
+        display.close()
+    return _finish_report(out, args.quiet, summary, display, study=study)
+
+
 def _cmd_figures(args) -> int:
     if not Path(args.path).is_dir():
         raise CLIError(f"no such reproduction directory: {args.path}")
-    return _finish_report(args.path, args.quiet)
+    return _finish_report(args.path, args.quiet, study=_stored_study(Path(args.path)))
+
+
+def _stored_study(path: Path):
+    """The Powell study if ``path`` holds its profile (``--profile powell``), else None (the
+    paper's reproduction)."""
+    import json
+
+    from ..paper import PowellProfile
+    from ..reproduce.study import get
+
+    try:
+        prof = json.loads((path / "profile.json").read_text(encoding="utf-8"))["profile"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None  # the paper's reader says what is wrong
+    fields = set(PowellProfile.__dataclass_fields__)
+    return get("powell") if isinstance(prof, dict) and fields <= set(prof) else None
 
 
 def _add_cluster_flags(p) -> None:
@@ -151,8 +195,9 @@ def register(sub) -> None:
     p.add_argument(
         "--quick", action="store_true", help="every figure and row, fewer replicas and stages"
     )
-    p.add_argument("--profile", default="full", help="full (default), quick or smoke")
-    p.add_argument("--out", help="output directory (default crumple-report[-quick])")
+    p.add_argument("--profile", default="full", help="full (default), quick, smoke, or powell "
+                   "(the paper's Powell minimiser at its likely budget, Fig. 2 wire)")  # fmt: skip
+    p.add_argument("--out", help="output directory (default crumple-report[-quick|-powell])")
     _add_cluster_flags(p)
     p.set_defaults(func=_cmd_reproduce)
 

@@ -22,6 +22,7 @@ from .curves import (
 )
 from .injection import plot_injection
 from .loops import plot_loop_count, plot_loop_shape
+from .powell import plot_powell_study
 
 __all__ = [
     "plot_alternatives",
@@ -34,6 +35,7 @@ __all__ = [
     "plot_mass_size",
     "plot_minimizer",
     "plot_plasticity",
+    "plot_powell_study",
     "plot_radius",
     "ramp_animation",
 ]

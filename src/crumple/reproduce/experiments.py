@@ -56,9 +56,10 @@ def _paper(name: str) -> Callable[[paper.Profile], Sweep]:
 
 def _powell_note(profile: dict) -> str:
     return (
-        "Non-converged stages are kept and counted here. Powell runs a fixed budget of "
-        f"{profile['powell_sweeps']} sweeps per stage (ours: the paper does not state one) "
-        "and is not expected to reach equilibrium within it (docs/performance.md)."
+        "Non-converged stages are kept and counted here. Powell (Numerical Recipes' method, "
+        f"compiled) runs a fixed budget of {profile['powell_sweeps']} sweeps per stage (the "
+        "paper states none; NR's code stops at 200) and is not expected to reach equilibrium "
+        "within it (docs/reproduction.md, 'The paper's minimiser')."
     )
 
 

@@ -51,7 +51,9 @@ def measure(ctx: Context) -> Record:
         f"{pconv['largest_force']:.2g}; energy above Newton's by up to "
         f"{np.nanmax(excess):.2g} (relative)",
         "criterion": "every stage converged; the paper does not say how many Powell "
-        "iterations it ran, so a failure at our budget does not refute it",
+        "iterations it ran (Numerical Recipes' powell stops at 200), so a failure at our "
+        "budget does not refute it; `crumple reproduce --profile powell` runs the paper's "
+        "likely budget with 5 replicas",
         "verdict": "consistent"
         if pconv["stages_converged"] == pconv["stages"]
         else f"inconclusive (not at our budget of {budget} sweeps per stage)",

@@ -77,6 +77,7 @@ class Series:
     incomplete: list[str]
     hard_core: float
     obs: dict[str, np.ndarray] = field(default_factory=dict)
+    iterations: np.ndarray | None = None  # (point, replica, lam): Newton iterations, Powell sweeps
 
     def index(self, key) -> int:
         return self.keys.index(tuple(float(k) for k in key))
@@ -119,6 +120,7 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
         done=ds["done"].values,
         incomplete=incomplete,
         hard_core=hard_core,
+        iterations=ds["iterations"].values if "iterations" in ds else None,
     )
     s.obs.update({k: ds[k].values for k in OBSERVABLES})
     s.obs.update({k: s.obs[v] for k, v in _ALIASES.items()})

@@ -65,8 +65,9 @@ PAPER = Study(
 def _studies() -> dict[str, Study]:
     from .cavity import CAVITY
     from .continuum import CONTINUUM
+    from .powell_study import POWELL_STUDY
 
-    return {"continuum": CONTINUUM, "cavity": CAVITY}
+    return {"continuum": CONTINUUM, "cavity": CAVITY, "powell": POWELL_STUDY}
 
 
 def get(name: str) -> Study:
@@ -78,4 +79,4 @@ def get(name: str) -> Study:
 
 
 #: The names of the studies ``crumple study`` runs (the paper's is ``crumple reproduce``).
-STUDIES = ("continuum", "cavity")
+STUDIES = ("continuum", "cavity", "powell")

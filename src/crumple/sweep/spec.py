@@ -135,7 +135,8 @@ class Sweep:
         ``k_b = 5``, ``k_s = 5e5`` as ``crumple run``.
     ramp : mapping
         Parameters of :class:`crumple.protocol.Ramp` (``lambdas``, ``initial_noise``,
-        ``stage_noise``, ``stop_tol``, ``method``, ``ftol``, ``maxiter``, ``max_step``), or
+        ``stage_noise``, ``stop_tol``, ``method``, ``ftol``, ``maxiter``, ``max_step``,
+        ``powell_rtol``), or
         ``schedule = {lam_min, lam_max, n}`` for :func:`crumple.protocol.default_schedule`.
     protocol : mapping
         ``kind = "ramp"`` (default; the ramp's parameters in ``ramp``) or ``kind =

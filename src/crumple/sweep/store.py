@@ -111,7 +111,9 @@ def run_id(wire: Wire, ramp: Ramp, replica: int, seed: int) -> str:
 #: At that value they are left out of the id, so that adding a parameter does not orphan the
 #: stored results. Enter a parameter here only if that is exactly true; otherwise let the ids
 #: change (the pinned ids in tests/test_sweep.py then fail, on purpose).
-ID_NEUTRAL = MappingProxyType({"wire": {"rest_angle_sd": 0.0, "cavity_radius": None}, "ramp": {}})
+ID_NEUTRAL = MappingProxyType(
+    {"wire": {"rest_angle_sd": 0.0, "cavity_radius": None}, "ramp": {"powell_rtol": None}}
+)
 
 
 def _is_injection(protocol) -> bool:
