@@ -154,6 +154,8 @@ def _trend(a: Estimate, b: Estimate) -> Estimate:
 
 
 def _trend_verdict(d: Estimate) -> str:
+    if not (np.isfinite(d.value) and np.isfinite(d.sigma)):
+        return "not measured"
     if d.value > 2 * d.sigma:
         return "consistent"
     if d.value < -2 * d.sigma:

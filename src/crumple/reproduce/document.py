@@ -11,6 +11,7 @@ from __future__ import annotations
 from . import registry
 from .analysis import Analysis
 from .common import _num, _range
+from .summary import summary_blocks
 
 __all__ = ["blocks"]
 
@@ -45,6 +46,12 @@ _CLAIMS = (
 )
 
 
+_CLAIM_HEAD = [
+    *("claim", "criterion", "per length: measured", "verdict"),
+    *("per node: measured", "verdict"),
+]
+
+
 _TITLE = "crumple: reproduction of Lin, Lin & Hong, Crumpling wires in two dimensions"
 _ORIGIN = (
     "Every parameter comes from the paper or is stated as ours in `crumple.paper` (with the "
@@ -57,6 +64,8 @@ def _head(an: Analysis, meta: dict, title: str, origin: str, conventions: str) -
     b: list[tuple] = [("h1", title)]
     if prof["name"] != "full":
         b.append(("warn", prof["description"]))
+    if any("per_node" in r for r in an.rows):  # a study without per-node twins has none
+        b += summary_blocks(an)
     b.append(
         (
             "p",
@@ -127,8 +136,10 @@ def _twin_cells(r: dict | None) -> list[str]:
 
 
 def _table(an: Analysis) -> list[tuple]:
-    head = ["quantity", "paper", "per length: ours ± σ", "|ours − paper|/σ", "verdict",
-            "per node: ours ± σ", "|ours − paper|/σ", "verdict", "fit range", "replicas"]  # fmt: skip
+    head = [
+        *("quantity", "paper", "per length: ours ± σ", "|ours − paper|/σ", "verdict"),
+        *("per node: ours ± σ", "|ours − paper|/σ", "verdict", "fit range", "replicas"),
+    ]
     body = [
         [
             r["quantity"],
@@ -201,8 +212,7 @@ def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
     return [
         ("h2", "The paper's claims"),
         ("p", _CLAIMS),
-        ("table", ["claim", "criterion", "per length: measured", "verdict",
-                   "per node: measured", "verdict"], claims),  # fmt: skip
+        ("table", _CLAIM_HEAD, claims),
         ("h2", "Open choices side by side"),
         ("p", alternatives),
         ("table", ["quantity", "variant", "value", "fit range", "replicas", "paper"], alts),

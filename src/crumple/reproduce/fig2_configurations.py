@@ -269,3 +269,23 @@ def _discuss(rec: Record) -> dict[str, str]:
             "closing a loop or the two tails running side by side)."
         )
     }
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why the contact onset differs under one reading, from its record."""
+    row = rec.rows[0]
+    fc = rec.extra.get("first_contact")
+    if row["ours"] is None:
+        return {"lambda_contact": "definition: no interior contact up to the last stage"}
+    return {
+        "lambda_contact": f"definition: the paper defines no contact; ours (two segments "
+        f"closer than {CONTACT_FACTOR:g} hard-core widths, away from the ends) first in "
+        f"{row['fit_range'][0]:.4g} < λ ≤ {row['fit_range'][1]:.4g}"
+        + (f", any contact from λ = {fc['lam']:.3g}" if fc else "")
+    }
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for the row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

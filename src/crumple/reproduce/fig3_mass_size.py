@@ -24,8 +24,8 @@ from .common import (
     _combine,
     _jsonable,
     _linear_slope,
-    _num,
     _missing_points_ok,
+    _num,
     _per_node_records,
     _pool,
     _row,
@@ -308,3 +308,46 @@ def discuss(rec: Record, records) -> dict[str, str]:
     """Why D_M differs (or not), per length and per node, from the numbers of the record."""
     pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
     return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why D_M and its saturation differ under one reading: one sentence each, from the
+    numbers of its record."""
+    ex = _jsonable(rec.extra)
+    h = ex["D_M_hollow"]
+    inner = next((a for a in rec.alternatives if a["variant"].startswith("fit on R/R_G in")), None)
+    if h["wires"] and h["wires"] == h["of"]:
+        where = h["inner"]
+        dm = (
+            f"shape: all {h['of']} wires coil into hollow rings (M(R) = 0 in the fit window), "
+            "so D_M cannot be fitted"
+            + (
+                f"; where the wire has mass it is {_num(where['value'], where['sigma'])}"
+                if where["value"] is not None
+                else ""
+            )
+        )
+    else:
+        mh = ex.get("M_at_half_RG") or [math.nan, math.nan]
+        dm = (
+            f"fit range: on R/R_G ∈ [0.5, 1] the disc sweeps the outer loops (M(R_G/2) = "
+            f"{mh[0]:.2f}-{mh[1]:.2f} of the mass), a steep climb"
+            + (
+                f"; the inner range [0.1, 0.5] gives {_num(inner['value'], inner['sigma'])}"
+                if inner is not None and inner["value"] is not None
+                else ""
+            )
+            + (f"; {h['wires']} of {h['of']} wires are hollow rings" if h["wires"] else "")
+        )
+    slope = next(r for r in rec.rows if r["key"] == "D_M_slope")
+    sat = (
+        f"size: D_M(λ) jumps between stages as loops form and zip (slope "
+        f"{_num(slope['ours'], slope['sigma'])} per decade of λ)"
+    )
+    return {"D_M": dm, "D_M_slope": sat}
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

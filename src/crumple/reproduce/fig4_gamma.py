@@ -28,8 +28,8 @@ from .common import (
     _fit_log_prefactor,
     _fit_replicas,
     _jsonable,
-    _num,
     _missing_points_ok,
+    _num,
     _per_node_records,
     _pool,
     _row,
@@ -417,3 +417,38 @@ def _discuss(rec: Record) -> dict[str, str]:
     out["eps_s"] = out["eps_b"]
     out["eps_l_theory"] = out["eps_l"]
     return out
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why the exponents of γ differ under one reading: one sentence each, from its record."""
+    ex = _jsonable(rec.extra)
+    curves = [v["value"] for v in ex["eps_curves"]["eps_l"].values() if v["value"] is not None]
+    spread = (
+        f"the {len(curves)} γ(λ) curves give {min(curves):.2f} to {max(curves):.2f}"
+        if curves
+        else "no γ(λ) curve could be fitted"
+    )
+    eps_l = f"fit range: over λ ∈ [500, 2000] {spread}"
+    lr = [v for k, v in ex["length_ratio_1000"].items() if k.endswith(", 2000") and v is not None]
+    t1 = {a["quantity"]: a for a in rec.alternatives if a["variant"].startswith("Table 1")}
+    th = ex["gamma_formula_exponents"]
+
+    def other(q, key):
+        a = t1.get(q)
+        got = "" if a is None or a["value"] is None else f" gives {_num(a['value'], a['sigma'])}"
+        return (
+            f"fit range: at k_s = 2e3 (below Table 1's range) the wire is compressed to "
+            f"L/L0 = {min(lr):.2f}-{max(lr):.2f} at λ = 1000; Table 1's range (k_s ≥ 1e4){got}"
+            f", the paper's closed form {th[key]:.2f}"
+            if lr and th.get(key) is not None
+            else "not measured at this profile's points"
+        )
+
+    return {"eps_l": eps_l, "eps_l_theory": eps_l, "eps_b": other("ε_b", "eps_b"),
+            "eps_s": other("ε_s", "eps_s")}  # fmt: skip
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

@@ -221,3 +221,31 @@ def _discuss(rec: Record, records) -> dict[str, str]:
         "is checked in the claims table."
     )
     return dict.fromkeys(_ROWS, text)
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why α with plasticity differs under one reading: one sentence per row, from its
+    record (θ_p is ours, and where few joints yield α is the elastic one)."""
+    ex = rec.extra
+    reach = ex["plastic_fraction_beyond_theta_p"]
+    el = rec.detail["elastic_alpha"]
+    out = {}
+    for key, s_val in (("alpha_s0.05", 0.05), ("alpha_s0.2", 0.2), ("alpha_s0.4", 0.4)):
+        k = f"s={s_val:g}, theta_p={paper.PLASTIC_THETA_P:g}"
+        fr = reach.get(k, math.nan)
+        out[key] = (
+            f"choice: θ_p = {paper.PLASTIC_THETA_P:g} rad is ours ({100 * fr:.0f} % of joints "
+            f"plastic); the elastic wire gives α = {el.value:.3f}"
+        )
+    sat = next(r for r in rec.rows if r["key"] == "alpha_saturation")
+    out["alpha_saturation"] = (
+        f"choice: at the largest θ_p few joints yield, so |α| is the elastic {abs(el.value):.3f}"
+        f" ({sat['note']})"
+    )
+    return out
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}
