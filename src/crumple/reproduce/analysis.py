@@ -7,6 +7,7 @@ measures the sections in registry order, each from the series it ``READS`` and t
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -73,7 +74,13 @@ class Analysis:
 def _read_profile(out: Path, study=None) -> dict:
     """``profile.json`` of ``out``, checked against the profile fields of ``study`` (default:
     the paper's reproduction, :data:`.study.PAPER`)."""
-    fields = Profile.__dataclass_fields__ if study is None else study.profile_fields
+    # the paper's profile fields without a default (one added later, with a default, is not
+    # required of a store made before it: that store resumes)
+    fields = (
+        [k for k, f in Profile.__dataclass_fields__.items() if f.default is dataclasses.MISSING]
+        if study is None
+        else study.profile_fields
+    )
     command = "crumple reproduce" if study is None else study.command
     what = "reproduction" if study is None else f"{study.name} study"
     path = out / PROFILE_FILE

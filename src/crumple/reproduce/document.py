@@ -202,7 +202,9 @@ def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
         [
             a["quantity"],
             a["variant"],
-            _num(a["value"], a["sigma"]),
+            "cannot be fitted (hollow ring)"
+            if a["value"] is None and a["quantity"].startswith("D_M")
+            else _num(a["value"], a["sigma"]),
             _range(a.get("fit_window") or a["fit_range"]),
             str(a["replicas"]),
             "—" if a["paper"] is None else f"{a['paper']:g}",
