@@ -327,6 +327,8 @@ def _reason(rec: Record) -> dict[str, str]:
                 else ""
             )
         )
+    elif ex["D_M_points"] and all(v["value"] is None for v in ex["D_M_points"].values()):
+        dm = "no wire of this profile's points could be fitted"
     else:
         mh = ex.get("M_at_half_RG") or [math.nan, math.nan]
         dm = (

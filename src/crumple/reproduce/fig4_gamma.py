@@ -444,8 +444,22 @@ def _reason(rec: Record) -> dict[str, str]:
             else "not measured at this profile's points"
         )
 
-    return {"eps_l": eps_l, "eps_l_theory": eps_l, "eps_b": other("ε_b", "eps_b"),
-            "eps_s": other("ε_s", "eps_s")}  # fmt: skip
+    out = {"eps_l": eps_l, "eps_l_theory": eps_l, "eps_b": other("ε_b", "eps_b"),
+           "eps_s": other("ε_s", "eps_s")}  # fmt: skip
+    rods = ex["straight_rods"]
+    for key, pts in (("eps_b", paper.FIG4A_POINTS), ("eps_s", paper.FIG4B_POINTS)):
+        row = next(r for r in rec.rows if r["key"] == key)
+        flat = [rods[f"{k[0]:g}, {k[1]:g}"] for k in pts if f"{k[0]:g}, {k[1]:g}" in rods]
+        if row["ours"] is None:  # nothing fitted: why
+            out[key] = "no curve of this panel could be fitted at this profile's points"
+        if row["ours"] is None and flat:  # γ undefined on rods: no curve to fit
+            out[key] = (
+                f"collapse: {len(flat)} of the {len(pts)} wires of this panel collapse into "
+                f"straight rods (L/L0 down to {min(v['length_ratio'] for v in flat):.3f}) from "
+                f"λ = {min(v['from_lam'] for v in flat):.3g}, where γ is undefined, so no "
+                "curve can be fitted"
+            )
+    return out
 
 
 def summarise(rec: Record, records) -> dict[str, dict[str, str]]:

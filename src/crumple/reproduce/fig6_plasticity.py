@@ -238,9 +238,16 @@ def _reason(rec: Record) -> dict[str, str]:
             f"plastic); the elastic wire gives α = {el.value:.3f}"
         )
     sat = next(r for r in rec.rows if r["key"] == "alpha_saturation")
+    for r in rec.rows:
+        if r["ours"] is None:
+            out[r["key"]] = "not run at this profile's points"
+    top = max((k for k in reach if k.startswith("s=0.4,")), key=lambda k: float(k.split("=")[-1]))
     out["alpha_saturation"] = (
-        f"choice: at the largest θ_p few joints yield, so |α| is the elastic {abs(el.value):.3f}"
-        f" ({sat['note']})"
+        f"choice: θ_p is ours; at the largest, θ_p = {top.split('=')[-1]} rad, "
+        f"{100 * reach[top]:.0f} % of joints are plastic, and the elastic wire gives "
+        f"|α| = {abs(el.value):.3f}"
+        if sat["ours"] is not None
+        else "not run at this profile's points"
     )
     return out
 

@@ -73,12 +73,15 @@ def _why(r: dict, reasons: dict[str, str]) -> str:
     """One sentence per reading that does not agree: the section's reason, or, where the
     other reading agrees, the normalisation."""
     states = {"per-length": _state(r), "per-node": _state(r.get("per_node"))}
+
     parts = []
     for reading in READINGS:
         if states[reading] == "agrees" or states[reading] == "not run":
             continue
-        if states[reading] != "differs":  # no value: say so, no reason to give
-            parts.append(f"{reading.replace('-', ' ')}: {states[reading]}")
+        if states[reading] != "differs":  # no value: say so, and why where a section knows
+            text = reasons.get(reading, "")
+            parts.append(f"{reading.replace('-', ' ')}: {states[reading]}"
+                         + (f" ({text})" if text else ""))  # fmt: skip
             continue
         other = READINGS[1 - READINGS.index(reading)]
         text = reasons.get(reading, "")
