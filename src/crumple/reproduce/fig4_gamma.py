@@ -310,7 +310,12 @@ def _draw(rec: Record):
 
 
 def notes(rec: Record) -> list[str]:
-    """The report's paragraph on the stages where γ is undefined."""
+    """The report's paragraphs on the stages where γ is undefined, per length and per node."""
+    pn = rec.detail.get("per_node")
+    return _notes(rec) + ([] if pn is None else ["Per node: " + _notes(pn)[0]])
+
+
+def _notes(rec: Record) -> list[str]:
     rods = rec.extra.get("straight_rods", {})
     return [
         f"γ = E_s/E_b is left undefined on straight wires (every joint below "
