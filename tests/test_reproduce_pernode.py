@@ -148,3 +148,20 @@ def test_claims_are_judged_under_both_readings(smoke):
     assert len(twins) >= 6  # α independence, the two plasticity trends, Fig. 2's three
     for c in twins:
         assert c["per_node"]["verdict"]
+
+
+def test_a_reproduction_without_the_per_node_runs_says_how_to_add_them(smoke, tmp_path):
+    """A store made before the per-node twins existed: a clear error, not a traceback."""
+    import shutil
+
+    from crumple.reproduce import analyse
+
+    out, _, _ = smoke
+    old = tmp_path / "old"
+    shutil.copytree(out / "data", old / "data", ignore=shutil.ignore_patterns("*_per_node"))
+    prof = json.loads((out / "profile.json").read_text())
+    for k in ("per_node_points", "per_node_plastic"):  # fields added with a default
+        prof["profile"].pop(k)
+    (old / "profile.json").write_text(json.dumps(prof))
+    with pytest.raises(ValueError, match="holds no 'elastic_per_node' runs.*crumple reproduce"):
+        analyse(old)

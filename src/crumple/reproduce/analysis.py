@@ -105,6 +105,11 @@ def _read_profile(out: Path, study=None) -> dict:
     return meta
 
 
+def command(study=None) -> str:
+    """The command that runs ``study``'s experiments (the paper's: ``crumple reproduce``)."""
+    return "crumple reproduce" if study is None else study.command
+
+
 def analyse(
     out, *, sections=None, log: Callable[[str], None] | None = None, study=None
 ) -> Analysis:
@@ -120,7 +125,13 @@ def analyse(
     for i, e in enumerate(exps, 1):
         if log:
             log(f"measuring: reading the {e.name} runs ({i}/{len(exps)})")
-        series[e.name] = _series(out / "data" / e.name, e.levels)
+        store = out / "data" / e.name
+        if not store.exists():  # a reproduction made before the experiment existed
+            raise ValueError(
+                f"{out} holds no {e.name!r} runs (made before that experiment existed?); run "
+                f"`{command(study)} --out {out}` with its profile to add them"
+            )
+        series[e.name] = _series(store, e.levels)
     records: dict[str, Record] = {}
     for i, s in enumerate(secs, 1):
         if log:
