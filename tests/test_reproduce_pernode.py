@@ -163,5 +163,5 @@ def test_a_reproduction_without_the_per_node_runs_says_how_to_add_them(smoke, tm
     for k in ("per_node_points", "per_node_plastic"):  # fields added with a default
         prof["profile"].pop(k)
     (old / "profile.json").write_text(json.dumps(prof))
-    with pytest.raises(ValueError, match="holds no 'elastic_per_node' runs.*crumple reproduce"):
+    with pytest.raises(ValueError, match=r"holds no 'elastic_per_node' runs.*crumple reproduce"):
         analyse(old)
