@@ -1,8 +1,9 @@
 """crumple reproduce: the experiments as data, the verdict arithmetic, the report's completeness.
 
-The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 9 stages) once
-per session (the ``smoke`` fixture, tests/conftest.py) and checks that every figure file and every table row of the report exists, and
-that its ``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
+The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 11 stages, per
+node at a few points) once per session (the ``smoke`` fixture, tests/conftest.py) and checks
+that every figure file and every table row of the report exists, and that its
+``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
 number (exact equality: a refactor must not move a bit). When a change to the physics moves the
 numbers on purpose, regenerate the golden file and say why in the commit::
 
