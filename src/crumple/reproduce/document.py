@@ -33,9 +33,11 @@ _CONVENTIONS = (
 )
 _ALTERNATIVES = (
     "Where the paper leaves a choice open, each alternative that matters, at "
-    "the same parameters (not picked to match). A D_M shown as — could not be "
-    "fitted: M(R) = 0 somewhere in the fit range (a hollow configuration, no "
-    "wire near the centre of mass; the per-node wire coils into a ring)."
+    "the same parameters (not picked to match); a variant 'per node: …' is the same "
+    "measure under per-node confinement. A D_M that 'cannot be fitted' has M(R) = 0 "
+    "somewhere in the fit range (a hollow configuration, no wire near the centre of mass; "
+    "the per-node wire coils into a ring); 'where the wire has mass' fits it on "
+    "[max(0.5, 1.1 ρ_in), 1], ρ_in the R/R_G where the mass starts."
 )
 
 
