@@ -112,7 +112,13 @@ def _shape_claims(wires: dict[str, tuple[Series, int]], judged: str) -> list[dic
             if s.valid(p, r, s.j(lm))
         )
     nl = infl[judged]
-    ok_infl = all(v is not None for v in nl) and all(b >= a for a, b in itertools.pairwise(nl))
+    # "more are formed": never fewer from one Fig. 2 stage to the next, and more at the last
+    # than at the first (a wire that has none at every stage forms none)
+    ok_infl = (
+        all(v is not None for v in nl)
+        and all(b >= a for a, b in itertools.pairwise(nl))
+        and nl[-1] > nl[0]
+    )
     return [
         {
             "claim": "no sharp edge: the wire stays smooth as λ grows",
@@ -129,7 +135,8 @@ def _shape_claims(wires: dict[str, tuple[Series, int]], judged: str) -> list[dic
             "increases'",
             "measured": "inflection points (sign changes of θ) at λ = 70, 200, 300, 1000: "
             + "; ".join(f"{k}: {v}" for k, v in infl.items()),
-            "criterion": "non-decreasing on the Newton wire of each reading (replica 0)",
+            "criterion": "non-decreasing, and more at λ = 1000 than at 70, on the Newton wire "
+            "of each reading (replica 0)",
             "verdict": "consistent" if ok_infl else "not consistent",
         },
     ]
