@@ -1,8 +1,9 @@
 """crumple reproduce: the experiments as data, the verdict arithmetic, the report's completeness.
 
-The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 9 stages) once
-per session (the ``smoke`` fixture, tests/conftest.py) and checks that every figure file and every table row of the report exists, and
-that its ``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
+The end-to-end test runs the ``smoke`` profile (every experiment, one replica, 11 stages, per
+node at a few points) once per session (the ``smoke`` fixture, tests/conftest.py) and checks
+that every figure file and every table row of the report exists, and that its
+``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
 number (exact equality: a refactor must not move a bit). When a change to the physics moves the
 numbers on purpose, regenerate the golden file and say why in the commit::
 
@@ -57,7 +58,19 @@ def test_profiles_build_every_experiment(name):
     for r in el.runs():  # the paper's Fig. 2 stages are always in the schedule
         assert set(paper.PAPER_LAMBDAS) <= set(r.ramp.lambdas)
         assert r.wire.confinement == "per-length" and r.ramp.method == "newton"
-    assert {r.wire.confinement for r in sweeps["per_node"].runs()} == {"per-node"}
+    for twin, of, keep in (
+        ("elastic_per_node", "elastic", prof.per_node_points),
+        ("plastic_per_node", "plastic", prof.per_node_plastic),
+    ):  # the per-node twins: the same points (or the profile's subset), stages and seed
+        pn, pl = sweeps[twin], sweeps[of]
+        assert {r.wire.confinement for r in pn.runs()} == {"per-node"}
+        assert pn.replicas == prof.per_node_replicas
+        assert {r.ramp for r in pn.runs()} == {r.ramp for r in pl.runs()}
+        assert pn.seed == pl.seed
+        wires = {r.wire.to_dict().__repr__() for r in pn.runs()}
+        same = {r.wire.to_dict().__repr__().replace("per-length", "per-node") for r in pl.runs()}
+        assert wires <= same
+        assert len(pn.points) == (len(pl.points) if keep is None else len(keep))
     assert {r.ramp.method for r in sweeps["powell"].runs()} == {"powell"}
     s_vals = {r.wire.plasticity.s for r in sweeps["plastic"].runs()}
     assert s_vals == set(paper.PLASTIC_S)
@@ -65,8 +78,25 @@ def test_profiles_build_every_experiment(name):
 
 def test_full_profile_has_the_papers_ten_replicas():
     full = paper.build_sweeps("full")
-    assert full["elastic"].replicas == 10
-    assert full["plastic"].replicas == 10
+    for name in ("elastic", "plastic", "elastic_per_node", "plastic_per_node"):
+        assert full[name].replicas == 10
+
+
+@pytest.mark.parametrize("name", ["full", "quick"])
+def test_per_node_runs_every_point_of_the_real_profiles(name):
+    """Only the smoke profile (tests) runs a subset per node; the others all points, with
+    as many replicas as per length (issue 14)."""
+    prof = paper.PROFILES[name]
+    assert prof.per_node_points is None and prof.per_node_plastic is None
+    assert prof.per_node_replicas == prof.replicas
+
+
+def test_a_per_node_subset_must_name_existing_points():
+    import dataclasses
+
+    bad = dataclasses.replace(paper.PROFILES["smoke"], per_node_points=((3.0, 7e3),))
+    with pytest.raises(ValueError, match="names points the experiment lacks"):
+        paper.build_sweeps(bad)
 
 
 def test_unknown_profile_is_a_clear_error():

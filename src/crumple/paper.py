@@ -63,11 +63,20 @@ DM_RANGE = (0.5, 1.0)
 #: "the growing exponent saturates at D_M = 1.33 for λ > 100".
 DM_SATURATION_RANGE = (100.0, 2000.0)
 #: Confinement: Eq. (1) prints λ r_i² per node, Eq. (2) λ ∫ r² ds per unit length; the two
-#: differ by the segment length Δs = 0.01. Chosen: per unit length (crumple's default), which
-#: reproduces the shapes of Fig. 2 at the paper's λ values, while per node coils the wire into
-#: a ring of touching layers already at λ = 70 (docs/model.md). The per-node wire is run as an
-#: alternative (the ``per_node`` experiment).
+#: differ by the segment length Δs = 0.01 (per-node λ = per-length λ × Δs at the same wire).
+#: The paper does not say which it ran, and the choice decides verdicts (issue 14), so every
+#: experiment of Figs. 2-6 runs under both, at the same λ values, points, replicas and stages:
+#: per unit length (crumple's default, :data:`CONFINEMENT`; it reproduces the shapes of Fig. 2
+#: at the paper's λ values) and per node (:data:`PER_NODE`, Eq. 1 as printed; it coils the
+#: wire into a ring of touching layers already at λ = 70, docs/model.md).
 CONFINEMENT = "per-length"
+#: The other reading of Eq. (1): λ r_i² per node, as printed.
+PER_NODE = "per-node"
+#: The points the ``smoke`` profile runs per node (tests only: per-node ramps cost 5-10× the
+#: per-length ones): the Fig. 2 wire, the Fig. 5 reference, one Fig. 4b curve; and three
+#: plastic wires (s, θ_p), the ends of the s trend and the largest θ_p of the inset.
+SMOKE_PER_NODE_POINTS = (FIG2, FIG5_REFERENCE, (6.0, 1e5))
+SMOKE_PER_NODE_PLASTIC = ((0.05, 0.1), (0.4, 0.1), (0.4, 0.5))
 #: Base seed of every sweep (replica r uses ``SeedSequence(SEED).spawn(n)[r]``).
 SEED = 20070101
 
@@ -188,6 +197,11 @@ class Profile:
     wire, ``powell_schedule_n`` stages, ``powell_sweeps`` Powell iterations per stage (the full
     profile: NR's ITMAX = 200, :data:`POWELL_ITMAX`; the Powell study, ``--profile powell``,
     runs more replicas and both stopping rules).
+
+    The per-node twins of the ``elastic`` and ``plastic`` experiments run ``per_node_replicas``
+    replicas (the report says so where they are fewer than ``replicas``) at every point, or
+    only at ``per_node_points`` ((k_b, k_s)) and ``per_node_plastic`` ((s, θ_p)) where given
+    (the smoke profile); the report marks the values a missing point leaves unmeasured.
     """
 
     name: str
@@ -200,6 +214,8 @@ class Profile:
     powell_schedule_n: int
     powell_sweeps: int
     description: str
+    per_node_points: tuple[tuple[float, float], ...] | None = None
+    per_node_plastic: tuple[tuple[float, float], ...] | None = None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -244,8 +260,10 @@ PROFILES: MappingProxyType[str, Profile] = MappingProxyType(
             powell_replicas=1,
             powell_schedule_n=3,
             powell_sweeps=1,
-            description="SMOKE PROFILE (tests only): 1 replica, 11 λ stages; the numbers mean "
-            "nothing",
+            description="SMOKE PROFILE (tests only): 1 replica, 11 λ stages, per node only at "
+            "3 elastic and 3 plastic points; the numbers mean nothing",
+            per_node_points=SMOKE_PER_NODE_POINTS,
+            per_node_plastic=SMOKE_PER_NODE_PLASTIC,
         ),
     }
 )
@@ -261,15 +279,34 @@ def points(pairs) -> list[dict[str, float]]:
     return out
 
 
+def _key(point: dict, levels: tuple[str, str]) -> tuple[float, float]:
+    """A sweep point's coordinates ``levels`` (``plasticity``'s ``s`` and ``theta_p``)."""
+    src = point.get("plasticity", point)
+    return tuple(float(src[k]) for k in levels)
+
+
+def _subset(pts: list[dict], keep, levels: tuple[str, str]) -> list[dict]:
+    """``pts`` in order, only those whose ``levels`` are in ``keep`` (None: all)."""
+    if keep is None:
+        return pts
+    want = {tuple(float(v) for v in k) for k in keep}
+    out = [p for p in pts if _key(p, levels) in want]
+    if len(out) != len(want):
+        raise ValueError(f"per-node subset {sorted(want)} names points the experiment lacks")
+    return out
+
+
 #: The experiments: what each sweep is for, which figures use it and where its points come from.
 EXPERIMENTS: MappingProxyType[str, str] = MappingProxyType(
     {
         "elastic": "Figs. 2-5: the six Fig. 3 points (also Fig. 5's curves), Fig. 4a (k_s = "
         "2e3, k_b = 1..10) and Fig. 4b (k_b = 6, k_s = 2e3..1e7); per-length confinement, "
         "Newton to equilibrium",
-        "plastic": "Fig. 6: (5, 5e5) with s = 0.05..0.8 at θ_p = 0.1, and θ_p scanned at s = 0.4",
-        "per_node": "alternative: the Fig. 2 wire with confinement λ r² per node (Eq. 1 as "
-        "printed)",
+        "plastic": "Fig. 6: (5, 5e5) with s = 0.05..0.8 at θ_p = 0.1, and θ_p scanned at s = 0.4; "
+        "per-length confinement",
+        "elastic_per_node": "the elastic experiment with confinement λ r² per node (Eq. 1 as "
+        "printed): the same points, replicas and λ stages",
+        "plastic_per_node": "the plastic experiment with confinement λ r² per node",
         "disorder": "alternative: the Fig. 2 wire with quenched rest-angle disorder 0.01 rad "
         "(replicas that differ physically, see docs/model.md)",
         "powell": "alternative: the Fig. 2 wire minimised with the paper's Powell (reduced subset)",
@@ -296,6 +333,8 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
         if t != PLASTIC_THETA_P
     ]
     powell_sched = list(default_schedule(n=profile.powell_schedule_n))
+    elastic_pn = _subset(elastic, profile.per_node_points, ("k_b", "k_s"))
+    plastic_pn = _subset(plastic, profile.per_node_plastic, ("s", "theta_p"))
     return {
         "elastic": Sweep(
             wire={"confinement": CONFINEMENT},
@@ -311,9 +350,17 @@ def build_sweeps(profile: Profile | str) -> dict[str, Sweep]:
             replicas=profile.replicas,
             seed=SEED,
         ),
-        "per_node": Sweep(
-            wire={"k_b": kb, "k_s": ks, "confinement": "per-node"},
+        "elastic_per_node": Sweep(
+            wire={"confinement": PER_NODE},
             ramp=base_ramp,
+            points=elastic_pn,
+            replicas=profile.per_node_replicas,
+            seed=SEED,
+        ),
+        "plastic_per_node": Sweep(
+            wire={"k_b": kb, "k_s": ks, "confinement": PER_NODE},
+            ramp=base_ramp,
+            points=plastic_pn,
             replicas=profile.per_node_replicas,
             seed=SEED,
         ),

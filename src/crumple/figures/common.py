@@ -58,12 +58,20 @@ def _panel_letter(ax, k: int) -> None:
 
 
 def _loglog_curves(ax, curves, *, marker="o", errors=None):
+    """Each curve ``{label: (x, y)}`` on log axes (its finite positive points); a panel with
+    no such point says so and keeps linear axes (a log axis of nothing is an error)."""
+    shown = 0
     for label, (x, y) in curves.items():
         x, y = np.asarray(x, float), np.asarray(y, float)
         ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
+        shown += int(ok.sum())
         line = ax.plot(x[ok], y[ok], marker=marker, ms=3, lw=1, label=str(label))[0]
         if errors and label in errors:
             e = np.asarray(errors[label], float)[ok]
             ax.fill_between(x[ok], y[ok] - e, y[ok] + e, color=line.get_color(), alpha=0.2, lw=0)
+    if not shown:
+        ax.text(0.5, 0.5, "no data (not run, or not measurable)", transform=ax.transAxes,
+                ha="center", va="center", fontsize=8, color="0.4")  # fmt: skip
+        return
     ax.set_xscale("log")
     ax.set_yscale("log")

@@ -23,6 +23,9 @@ def plot_mass_size(curves, dm_lambda, *, fit_range, paper_value=None) -> Figure:
     fig = Figure(figsize=(10, 4), layout="constrained")
     a, b = fig.subplots(1, 2)
     for label, (x, m, (pre, dm)) in curves.items():
+        if not np.isfinite(dm):  # M(R) = 0 in the window: a hollow ring, no fit
+            a.plot(x, m, lw=1, label=f"{label}: D_M cannot be fitted (hollow)")
+            continue
         line = a.plot(x, m, lw=1, label=f"{label}: D_M = {dm:.2f}")[0]
         xf = np.geomspace(*fit_range, 20)
         a.plot(xf, pre * xf**dm, "--", color=line.get_color(), lw=1.5)
@@ -100,7 +103,8 @@ def plot_gamma(
             ax.text(0.98, 0.02, notes[k], transform=ax.transAxes, fontsize=7, va="bottom",
                     ha="right", color="tab:red")  # fmt: skip
         lo, hi = ax.get_ylim()
-        ax.set_ylim(lo, hi * (hi / lo) ** 0.5)  # room above the data for the legend
+        if 0 < lo < hi and np.isfinite(hi):  # a panel without data keeps its default limits
+            ax.set_ylim(lo, hi * (hi / lo) ** 0.5)  # room above the data for the legend
         ax.legend(fontsize=6, ncol=2, loc="upper left")
         _panel_letter(ax, k)
     return fig

@@ -22,6 +22,7 @@ explains the interface. The conventions of every number are in :mod:`.common`::
     registry      the sections in report order; register() adds one
     running       run(): every experiment on one Dask cluster
     analysis      analyse(): every section's record
+    summary       the one-minute summary at the top (from the rows, both readings)
     document      the report's structure (blocks)
     render        blocks -> Markdown, HTML (knows no figure)
     report        write_report(), check_report()

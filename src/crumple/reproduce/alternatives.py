@@ -2,7 +2,8 @@
 alternative of the report.
 
 Runs: ``elastic`` at :data:`crumple.paper.FIG2` and the three variants of that wire:
-``per_node`` (Eq. 1 as printed), ``disorder`` (quenched rest-angle disorder) and ``powell``.
+``elastic_per_node`` (Eq. 1 as printed), ``disorder`` (quenched rest-angle disorder) and
+``powell``.
 Measures: α, D_M and γ of each, and the relative spread of the energy over replicas (are the
 replicas different foldings?). Says: alternatives and one claim. Draws every alternative of
 the sections it names in ``NEEDS`` (and its own) in one figure.
@@ -16,11 +17,11 @@ import numpy as np
 
 from .. import paper
 from .common import Context, Estimate, Record, _alt, _combine
-from .experiments import DISORDER, ELASTIC, PER_NODE, POWELL
+from .experiments import DISORDER, ELASTIC, ELASTIC_PER_NODE, POWELL
 from .series import _alpha, _dm
 
 NAME = "alternatives"
-READS = (ELASTIC, PER_NODE, DISORDER, POWELL)
+READS = (ELASTIC, ELASTIC_PER_NODE, DISORDER, POWELL)
 NEEDS = ("fig3_mass_size", "fig4_gamma", "fig5_radius")
 VALUES = ()
 FIGURES = {
@@ -70,9 +71,10 @@ def _metastable_claim(alts: list[dict]) -> dict:
 def measure(ctx: Context) -> Record:
     """The four wires at (5, 5e5); the groups of the alternatives figure."""
     el = ctx.series["elastic"]
+    pn = ctx.series["elastic_per_node"]
     variants = (
         ("per-length, Newton (default)", el, el.index(paper.FIG2)),
-        ("per-node (Eq. 1 as printed)", ctx.series["per_node"], 0),
+        ("per-node (Eq. 1 as printed)", pn, pn.index(paper.FIG2)),
         ("rest-angle disorder 0.01 rad", ctx.series["disorder"], 0),
         ("Powell (paper's method, reduced)", ctx.series["powell"], 0),
     )

@@ -7,6 +7,7 @@ measures the sections in registry order, each from the series it ``READS`` and t
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -73,7 +74,13 @@ class Analysis:
 def _read_profile(out: Path, study=None) -> dict:
     """``profile.json`` of ``out``, checked against the profile fields of ``study`` (default:
     the paper's reproduction, :data:`.study.PAPER`)."""
-    fields = Profile.__dataclass_fields__ if study is None else study.profile_fields
+    # the paper's profile fields without a default (one added later, with a default, is not
+    # required of a store made before it: that store resumes)
+    fields = (
+        [k for k, f in Profile.__dataclass_fields__.items() if f.default is dataclasses.MISSING]
+        if study is None
+        else study.profile_fields
+    )
     command = "crumple reproduce" if study is None else study.command
     what = "reproduction" if study is None else f"{study.name} study"
     path = out / PROFILE_FILE
@@ -98,6 +105,11 @@ def _read_profile(out: Path, study=None) -> dict:
     return meta
 
 
+def command(study=None) -> str:
+    """The command that runs ``study``'s experiments (the paper's: ``crumple reproduce``)."""
+    return "crumple reproduce" if study is None else study.command
+
+
 def analyse(
     out, *, sections=None, log: Callable[[str], None] | None = None, study=None
 ) -> Analysis:
@@ -113,7 +125,13 @@ def analyse(
     for i, e in enumerate(exps, 1):
         if log:
             log(f"measuring: reading the {e.name} runs ({i}/{len(exps)})")
-        series[e.name] = _series(out / "data" / e.name, e.levels)
+        store = out / "data" / e.name
+        if not store.exists():  # a reproduction made before the experiment existed
+            raise ValueError(
+                f"{out} holds no {e.name!r} runs (made before that experiment existed?); run "
+                f"`{command(study)} --out {out}` with its profile to add them"
+            )
+        series[e.name] = _series(store, e.levels)
     records: dict[str, Record] = {}
     for i, s in enumerate(secs, 1):
         if log:

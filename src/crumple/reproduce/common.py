@@ -16,9 +16,10 @@ Conventions of every number (stated in the report too):
 
 from __future__ import annotations
 
+import contextlib
 import math
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -153,6 +154,8 @@ def _trend(a: Estimate, b: Estimate) -> Estimate:
 
 
 def _trend_verdict(d: Estimate) -> str:
+    if not (np.isfinite(d.value) and np.isfinite(d.sigma)):
+        return "not measured"
     if d.value > 2 * d.sigma:
         return "consistent"
     if d.value < -2 * d.sigma:
@@ -258,3 +261,68 @@ def nan_quiet(f, *args, **kw):
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "All-NaN slice|Mean of empty slice", RuntimeWarning)
         return f(*args, **kw)
+
+
+# ---- the two readings of Eq. (1): per length (the default) and per node ---------------------
+
+#: The fields of a row that its per-node twin fills (``row["per_node"]``).
+_TWIN_FIELDS = (
+    "ours",
+    "sigma",
+    "deviation_sigma",
+    "fit_range",
+    "replicas",
+    "verdict",
+    "note",
+    "bracket",
+    "hollow",
+)
+#: The prefix of a per-node alternative's variant.
+PER_NODE_VARIANT = "per node: "
+
+
+def _twin(name: str, pl: Record, pn: Record) -> Record:
+    """One record of a section measured under both readings of Eq. (1): ``pl`` per length
+    (its rows, claims, extra and detail stay where they were) and ``pn`` per node: each row
+    and claim gets ``["per_node"]`` (the twin's fields, matched by key or claim), the
+    alternatives the twin's with their variant prefixed, ``extra[name + "_per_node"]`` the
+    twin's extra, and ``detail["per_node"]`` the twin's whole record (its figures)."""
+    by_key = {r["key"]: r for r in pn.rows}
+    rows = tuple(
+        {**r, "per_node": {k: by_key[r["key"]][k] for k in _TWIN_FIELDS if k in by_key[r["key"]]}}
+        if r["key"] in by_key
+        else r
+        for r in pl.rows
+    )
+    by_claim = {c["claim"]: c for c in pn.claims}
+    claims = tuple(
+        {**c, "per_node": {k: by_claim[c["claim"]][k] for k in ("measured", "verdict")}}
+        if c["claim"] in by_claim
+        else c
+        for c in pl.claims
+    )
+    alts = pl.alternatives + tuple(
+        {**a, "variant": PER_NODE_VARIANT + a["variant"]} for a in pn.alternatives
+    )
+    return Record(
+        rows=rows,
+        alternatives=alts,
+        claims=claims,
+        extra={**pl.extra, f"{name}_per_node": pn.extra},
+        detail={**pl.detail, "per_node": pn},
+    )
+
+
+def _per_node_records(records: Mapping[str, Record]) -> dict[str, Record]:
+    """The per-node twin of every record that has one (:func:`_twin`), else the record."""
+    return {k: r.detail.get("per_node", r) for k, r in records.items()}
+
+
+@contextlib.contextmanager
+def _missing_points_ok() -> Iterator[None]:
+    """Around the measures of a per-node series: the points a profile did not run per node
+    (the smoke profile's subset, :meth:`.series.Series.reindex`) are NaN, and means over them
+    are NaN without a warning (the report says "not measured")."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield

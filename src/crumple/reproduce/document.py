@@ -11,6 +11,7 @@ from __future__ import annotations
 from . import registry
 from .analysis import Analysis
 from .common import _num, _range
+from .summary import summary_blocks
 
 __all__ = ["blocks"]
 
@@ -23,16 +24,34 @@ _CONVENTIONS = (
     "agrees when |ours − paper| ≤ 2σ. Error bars and bands in every figure are ±2σ with this σ "
     "(for a replica mean: the standard error of the mean), unless a caption says otherwise. "
     "The λ-onset of contacts is a bracket of two successive stages, not a value with a σ. "
-    "α is fitted over λ ∈ [100, 2000] everywhere. Confinement λ r² per unit length, Newton "
+    "α is fitted over λ ∈ [100, 2000] everywhere. Every number of Figs. 2-6 is measured "
+    "under both readings of Eq. 1, at the same λ values, points, replicas and stages: "
+    "confinement λ r² per unit length (Eq. 2, crumple's default) and per node (Eq. 1 as "
+    "printed; its λ corresponds to a per-length λ/Δs, Δs = 0.01). Newton "
     "to max force ≤ 1e-6 at every stage, unless a row says otherwise; R_G = "
     "r_max (the paper's reading, Sec. III.C); M(R) exact (fractional segments)."
 )
 _ALTERNATIVES = (
     "Where the paper leaves a choice open, each alternative that matters, at "
-    "the same parameters (not picked to match). A D_M shown as — could not be "
-    "fitted: M(R) = 0 somewhere in the fit range (a hollow configuration, no "
-    "wire near the centre of mass; the per-node wire coils into a ring)."
+    "the same parameters (not picked to match); a variant 'per node: …' is the same "
+    "measure under per-node confinement. A D_M that 'cannot be fitted' has M(R) = 0 "
+    "somewhere in the fit range (a hollow configuration, no wire near the centre of mass; "
+    "the per-node wire coils into a ring); 'where the wire has mass' fits it on "
+    "[max(0.5, 1.1 ρ_in), 1], ρ_in the R/R_G where the mass starts."
 )
+
+
+_CLAIMS = (
+    "Each claim judged under both readings of Eq. 1 where the report ran it under both: "
+    "confinement λ r² per unit length and per node (the same points, replicas and stages). "
+    "A claim about the paper's minimiser or the Fig. 2 wire alone is judged once."
+)
+
+
+_CLAIM_HEAD = [
+    *("claim", "criterion", "per length: measured", "verdict"),
+    *("per node: measured", "verdict"),
+]
 
 
 _TITLE = "crumple: reproduction of Lin, Lin & Hong, Crumpling wires in two dimensions"
@@ -47,6 +66,8 @@ def _head(an: Analysis, meta: dict, title: str, origin: str, conventions: str) -
     b: list[tuple] = [("h1", title)]
     if prof["name"] != "full":
         b.append(("warn", prof["description"]))
+    if any("per_node" in r for r in an.rows):  # a study without per-node twins has none
+        b += summary_blocks(an)
     b.append(
         (
             "p",
@@ -95,23 +116,47 @@ def _deviation(r: dict) -> str:
 def _ours(r: dict) -> str:
     if r.get("bracket") and r["ours"] is not None:
         return f"{r['ours']:g} (bracket {_range(r['fit_range'], True)})"
+    hollow = r.get("hollow")
+    if hollow and hollow["wires"]:
+        inner = hollow["inner"]
+        where = (
+            f"; where the wire has mass, [{inner['fit_range'][0]:.2f}, 1]: "
+            f"{_num(inner['value'], inner['sigma'])}"
+            if inner["value"] is not None
+            else ""
+        )
+        what = _num(r["ours"], r["sigma"]) if r["ours"] is not None else "cannot be fitted"
+        return f"{what} ({hollow['wires']}/{hollow['of']} wires hollow rings{where})"
     return _num(r["ours"], r["sigma"])
 
 
+def _twin_cells(r: dict | None) -> list[str]:
+    """ours ± σ, deviation and verdict of one reading (None: not run under it)."""
+    if r is None:
+        return ["—", "—", "not run"]
+    return [_ours(r), _deviation(r), r["verdict"]]
+
+
 def _table(an: Analysis) -> list[tuple]:
-    head = ["quantity", "paper", "ours ± σ", "|ours − paper|/σ", "fit range", "replicas",
-            "verdict"]  # fmt: skip
+    head = [
+        *("quantity", "paper", "per length: ours ± σ", "|ours − paper|/σ", "verdict"),
+        *("per node: ours ± σ", "|ours − paper|/σ", "verdict", "fit range", "replicas"),
+    ]
     body = [
         [
             r["quantity"],
             f"{r['paper']:g}",
-            _ours(r),
-            _deviation(r),
+            *_twin_cells(r),
+            *_twin_cells(r.get("per_node")),
             # a row fitted over a window of λ prints the window (the same for every α row);
             # the stages inside it are in results.json's fit_range
             _range(r.get("fit_window") or r["fit_range"], r.get("bracket", False)),
-            r["replicas"],
-            r["verdict"],
+            r["replicas"]
+            + (
+                f" (per node {r['per_node']['replicas']})"
+                if r.get("per_node") and r["per_node"]["replicas"] != r["replicas"]
+                else ""
+            ),
         ]
         for r in an.rows
     ]
@@ -120,10 +165,15 @@ def _table(an: Analysis) -> list[tuple]:
     said: dict[str, str] = {}
     for r in an.rows:
         text = (
-            f"**{r['quantity']}** — {r['verdict']}. {r['note']}."
+            f"**{r['quantity']}** — per length: {r['verdict']}. {r['note']}."
             if r["note"]
-            else f"**{r['quantity']}** — {r['verdict']}."
+            else f"**{r['quantity']}** — per length: {r['verdict']}."
         )
+        pn = r.get("per_node")
+        if pn is not None:
+            text += f" Per node: {pn['verdict']}." + (
+                f" {pn['note']}." if pn["note"] and pn["note"] != r["note"] else ""
+            )
         text += f" Source: {r['source']}."
         if r["key"] in disc:
             d = disc[r["key"]]
@@ -139,12 +189,24 @@ def _table(an: Analysis) -> list[tuple]:
 
 
 def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
-    claims = [[c["claim"], c["measured"], c["criterion"], c["verdict"]] for c in an.claims]
+    claims = [
+        [
+            c["claim"],
+            c["criterion"],
+            c["measured"],
+            c["verdict"],
+            c["per_node"]["measured"] if "per_node" in c else "—",
+            c["per_node"]["verdict"] if "per_node" in c else "not judged per node",
+        ]
+        for c in an.claims
+    ]
     alts = [
         [
             a["quantity"],
             a["variant"],
-            _num(a["value"], a["sigma"]),
+            "cannot be fitted (hollow ring)"
+            if a["value"] is None and a["quantity"].startswith("D_M")
+            else _num(a["value"], a["sigma"]),
             _range(a.get("fit_window") or a["fit_range"]),
             str(a["replicas"]),
             "—" if a["paper"] is None else f"{a['paper']:g}",
@@ -153,7 +215,8 @@ def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
     ]
     return [
         ("h2", "The paper's claims"),
-        ("table", ["claim", "measured", "criterion", "verdict"], claims),
+        ("p", _CLAIMS),
+        ("table", _CLAIM_HEAD, claims),
         ("h2", "Open choices side by side"),
         ("p", alternatives),
         ("table", ["quantity", "variant", "value", "fit range", "replicas", "paper"], alts),

@@ -1,7 +1,7 @@
 """What runs: the experiments of the reproduction, each one sweep store under ``DIR/data``.
 
 An :class:`Experiment` names a store, says how its points are labelled and builds its sweep
-from a profile. The paper's five are declared here, from :mod:`crumple.paper` (the points and
+from a profile. The paper's six are declared here, from :mod:`crumple.paper` (the points and
 the reasons for them live there); several sections of the report read the same experiment
 (``ELASTIC`` feeds Figs. 2 to 5). A new study that needs a sweep of its own declares its
 ``Experiment`` in its own module and lists it in its ``READS``.
@@ -16,7 +16,16 @@ from dataclasses import dataclass
 from .. import paper
 from ..sweep import Sweep
 
-__all__ = ["DISORDER", "ELASTIC", "PAPER", "PER_NODE", "PLASTIC", "POWELL", "Experiment"]
+__all__ = [
+    "DISORDER",
+    "ELASTIC",
+    "ELASTIC_PER_NODE",
+    "PAPER",
+    "PLASTIC",
+    "PLASTIC_PER_NODE",
+    "POWELL",
+    "Experiment",
+]
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -67,8 +76,14 @@ def _powell_note(profile: dict) -> str:
 ELASTIC = Experiment(name="elastic", levels=("k_b", "k_s"), build=_paper("elastic"))
 #: Fig. 6: plasticity s and θ_p at the Fig. 2 point.
 PLASTIC = Experiment(name="plastic", levels=("s", "theta_p"), build=_paper("plastic"))
-#: Alternative: confinement λ r² per node (Eq. 1 as printed).
-PER_NODE = Experiment(name="per_node", levels=(), build=_paper("per_node"))
+#: Figs. 2-5 again with confinement λ r² per node (Eq. 1 as printed).
+ELASTIC_PER_NODE = Experiment(
+    name="elastic_per_node", levels=("k_b", "k_s"), build=_paper("elastic_per_node")
+)
+#: Fig. 6 again with confinement λ r² per node.
+PLASTIC_PER_NODE = Experiment(
+    name="plastic_per_node", levels=("s", "theta_p"), build=_paper("plastic_per_node")
+)
 #: Alternative: quenched rest-angle disorder.
 DISORDER = Experiment(name="disorder", levels=(), build=_paper("disorder"))
 #: Alternative: the paper's Powell minimiser, reduced.
@@ -76,4 +91,4 @@ POWELL = Experiment(name="powell", levels=(), build=_paper("powell"), note=_powe
 
 #: The paper's experiments in the order of :data:`crumple.paper.EXPERIMENTS` (the order of the
 #: report's "Runs" list; experiments of added studies follow).
-PAPER = (ELASTIC, PLASTIC, PER_NODE, DISORDER, POWELL)
+PAPER = (ELASTIC, PLASTIC, ELASTIC_PER_NODE, PLASTIC_PER_NODE, DISORDER, POWELL)

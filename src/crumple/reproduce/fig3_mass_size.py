@@ -1,9 +1,11 @@
 """Fig. 3: the mass-size exponent D_M at λ = 1000 over six (k_b, k_s), and D_M against λ.
 
-Runs: ``elastic`` at :data:`crumple.paper.FIG3_POINTS`. Measures: D_M per point (replica
-mean, :func:`~crumple.reproduce.common._combine`) pooled over the six, three alternative
-readings of Eq. 3 and of the fit, the replica-mean D_M at every stage and its slope against
-log10 λ above λ = 100 (saturation). Says: rows ``D_M`` and ``D_M_slope``.
+Runs: ``elastic`` and ``elastic_per_node`` at :data:`crumple.paper.FIG3_POINTS`. Measures,
+under each reading of Eq. 1: D_M per point (replica mean,
+:func:`~crumple.reproduce.common._combine`) pooled over the six, three alternative readings of
+Eq. 3 and of the fit, the wires that cannot be fitted (hollow: no wire within R_G/2 of the
+centre of mass) with D_M where the wire has mass, the replica-mean D_M at every stage and its
+slope against log10 λ above λ = 100 (saturation). Says: rows ``D_M`` and ``D_M_slope``.
 """
 
 from __future__ import annotations
@@ -14,12 +16,26 @@ import numpy as np
 
 from .. import paper
 from ..observables import mass_size_exponent, mass_within, r_max
-from .common import Context, Estimate, Record, _alt, _jsonable, _linear_slope, _num, _pool, _row
-from .experiments import ELASTIC
+from .common import (
+    Context,
+    Estimate,
+    Record,
+    _alt,
+    _combine,
+    _jsonable,
+    _linear_slope,
+    _missing_points_ok,
+    _num,
+    _per_node_records,
+    _pool,
+    _row,
+    _twin,
+)
+from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import LAM_FIG3, Series, _dm, _dm_fit
 
 NAME = "fig3_mass_size"
-READS = (ELASTIC,)
+READS = (ELASTIC, ELASTIC_PER_NODE)
 NEEDS: tuple[str, ...] = ()
 VALUES = tuple(paper.PAPER_VALUES[k] for k in ("D_M", "D_M_slope"))
 FIGURES = {
@@ -30,7 +46,13 @@ FIGURES = {
     "replica, because M(R) = 0 at R = R_G/2 (no wire within half the radius of the centre "
     "of mass: a hollow loop, typical of the first loops). D_M = 1 at the first stages: the "
     "wire is still straight",
+    "fig3_mass_size_per_node": "Fig. 3 with confinement λ r² per node (Eq. 1 as printed), "
+    "the same points, replicas and stages: (a) M(R)/M at λ = 1000, (b) D_M against λ. A "
+    "curve of (a) without a fit ('cannot be fitted'), and the gaps in (b), are hollow rings: "
+    "M(R) = 0 over part of the fit window, where D_M cannot be fitted",
 }
+#: A range where the wire has mass must span at least this factor in R to be fitted.
+_MIN_SPAN = 1.25
 _QUANTITY = "D_M at λ = 1000, six points"
 
 
@@ -66,19 +88,86 @@ def _mass_curves(el: Series) -> dict:
         x = el.positions[p, 0, j3]
         ratio = np.geomspace(0.05, 1.0, 60)
         m = mass_within(x, ratio * r_max(x))
-        f = mass_size_exponent(x)
-        curves[_label(k)] = (ratio, m, (f.prefactor, f.exponent))
+        try:
+            f = mass_size_exponent(x)
+            fit = (f.prefactor, f.exponent)
+        except ValueError:  # M(R) = 0 somewhere in the fit window: hollow, no fit
+            fit = (math.nan, math.nan)
+        curves[_label(k)] = (ratio, m, fit)
     return curves
 
 
-def measure(ctx: Context) -> Record:
-    """D_M, its alternatives and its saturation, from the ``elastic`` store."""
-    el = ctx.series["elastic"]
-    nrep = ctx.replicas
+def _inner_start(x) -> float:
+    """The smallest R/R_G (R_G = r_max) at which M(R) > 0: where the wire starts, seen from
+    its centre of mass (0.01 resolution in ln R)."""
+    ratio = np.geomspace(0.01, 1.0, 461)
+    m = mass_within(x, ratio * r_max(x))
+    return float(ratio[np.argmax(m > 0)])
+
+
+def _dm_hollow(el: Series, p: int) -> tuple[int, int, Estimate]:
+    """At λ = 1000: how many of the wires of point ``p`` cannot be fitted on the paper's
+    range (M(R) = 0 somewhere in it: hollow), of how many, and D_M on the range where each
+    wire has mass, [max(0.5, 1.1 ρ), 1] with ρ the R/R_G where its mass starts (a range
+    narrower than a factor 1.25 in R is not fitted)."""
+    j = el.j(LAM_FIG3)
+    hollow, total, vals, errs, lo = 0, 0, [], [], 0.0
+    for r in range(el.replicas):
+        if not el.valid(p, r, j):
+            continue
+        x = el.positions[p, r, j]
+        total += 1
+        hollow += int(not np.isfinite(_dm_fit(x)[0]))
+        start = max(paper.DM_RANGE[0], 1.1 * _inner_start(x))
+        if start * _MIN_SPAN <= 1.0:
+            v, e = _dm_fit(x, fit_range=(start, 1.0))
+            vals.append(v)
+            errs.append(e)
+            lo = max(lo, start)
+    return hollow, total, _combine(vals, errs, (lo, 1.0) if vals else None)
+
+
+def _hollow_info(el: Series, fig3: list[int]) -> dict:
+    """Hollow wires over the six points at λ = 1000, and D_M where the wire has mass."""
+    per = [_dm_hollow(el, p) for p in fig3]
+    inner = _pool([e for _, _, e in per])
+    return {
+        "wires": sum(h for h, _, _ in per),
+        "of": sum(t for _, t, _ in per),
+        "inner": inner.to_dict(),
+        "inner_points": {
+            f"{el.keys[p][0]:g}, {el.keys[p][1]:g}": {"hollow": h, "of": t, **e.to_dict()}
+            for p, (h, t, e) in zip(fig3, per, strict=True)
+        },
+    }
+
+
+def _hollow_note(h: dict) -> str:
+    inner = h["inner"]
+    where = (
+        f"; where the wire has mass, R/R_G ∈ [{inner['fit_range'][0]:.2f}, 1]: D_M = "
+        f"{_num(inner['value'], inner['sigma'])}"
+        if inner["value"] is not None
+        else "; no range of R where the wire has mass spans a factor 1.25"
+    )
+    return (
+        f"{h['wires']} of {h['of']} wires at λ = 1000 cannot be fitted on R/R_G ∈ [0.5, 1]: "
+        f"hollow rings, M(R) = 0 over part of the range{where}"
+    )
+
+
+def _measure(el: Series, nrep: int) -> Record:
+    """D_M, its alternatives and its saturation, from one elastic series."""
     fig3 = [el.index(k) for k in paper.FIG3_POINTS]
     dm_points = {tuple(el.keys[p]): _dm(el, p) for p in fig3}
     dm = _pool(list(dm_points.values()), paper.DM_RANGE)
-    rows = [_row("D_M", dm, f"{nrep} × 6 points", "mean over the six (k_b, k_s)")]
+    hollow = _hollow_info(el, fig3)
+    note = "mean over the six (k_b, k_s)"
+    if hollow["wires"]:
+        note += "; " + _hollow_note(hollow)
+    rows = [{**_row("D_M", dm, f"{nrep} × 6 points", note), "hollow": hollow}]
+    if not np.isfinite(dm.value) and hollow["wires"]:
+        rows[0]["verdict"] = "cannot be fitted (hollow ring)"
     alts = [_alt(_QUANTITY, "default: R_G = r_max, exact M(R), [0.5, 1]", dm, nrep, 1.33)]
     for variant, kw in (
         ("R_G = RMS radius", {"rg": "rms"}),
@@ -87,6 +176,10 @@ def measure(ctx: Context) -> Record:
     ):
         est = _pool([_dm(el, p, **kw) for p in fig3], kw.get("fit_range", paper.DM_RANGE))
         alts.append(_alt(_QUANTITY, variant, est, nrep, 1.33))
+    inner = Estimate(hollow["inner"]["value"] or math.nan, hollow["inner"]["sigma"] or math.nan,
+                     hollow["of"], hollow["inner"]["fit_range"])  # fmt: skip
+    alts.append(_alt(_QUANTITY, "where the wire has mass: [max(0.5, 1.1 ρ_in), 1]", inner,
+                     nrep, 1.33))  # fmt: skip
     j3 = el.j(LAM_FIG3)
     m_half = [
         float(mass_within(el.positions[p, r, j3], [0.5 * r_max(el.positions[p, r, j3])])[0])
@@ -97,8 +190,9 @@ def measure(ctx: Context) -> Record:
     dm_lam, dm_lam_sd, dm_lam_n = _dm_against_lambda(el, fig3)
     extra = {
         "D_M_points": {f"{k[0]:g}, {k[1]:g}": v for k, v in dm_points.items()},
+        "D_M_hollow": hollow,
         "M_at_half_RG": [min(m_half), max(m_half)] if m_half else None,
-        "r_max_1000": float(np.nanmean(el.obs["r_max"][fig3][:, :, j3])),
+        "r_max_1000": _nanmean(el.obs["r_max"][fig3][:, :, j3]),
         "D_M_lambda": {
             "points": [list(el.keys[p]) for p in fig3],
             "lam": el.lam,
@@ -109,7 +203,7 @@ def measure(ctx: Context) -> Record:
     }
     lo, hi = paper.DM_SATURATION_RANGE
     sel = (el.lam > lo) & (el.lam <= hi)
-    y = np.nanmean(dm_lam[:, sel], axis=0)
+    y = _nanmean(dm_lam[:, sel], axis=0)
     slope, slope_err = _linear_slope(np.log10(el.lam[sel]), y)
     rows.append(
         _row(
@@ -127,22 +221,51 @@ def measure(ctx: Context) -> Record:
     )
 
 
-def draw(rec: Record) -> dict:
-    """Fig. 3: M(R) with its fits, and D_M against λ."""
+def _nanmean(a, axis=None):
+    """np.nanmean without the warning of an all-NaN slice (NaN there: nothing measured)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out = np.nanmean(a, axis=axis)
+    return float(out) if axis is None else out
+
+
+def measure(ctx: Context) -> Record:
+    """D_M, its alternatives and its saturation, per length and per node."""
+    el = ctx.series["elastic"]
+    pn = ctx.series["elastic_per_node"].reindex(el.keys)
+    with _missing_points_ok():
+        twin = _measure(pn, ctx.profile["per_node_replicas"])
+    return _twin(NAME, _measure(el, ctx.replicas), twin)
+
+
+def _draw(rec: Record):
     from ..figures import plot_mass_size
 
     d = rec.extra["D_M_lambda"]
     # σ of a replica mean: sd / sqrt(n) (the band is ±2σ, as everywhere in the report)
     sem = np.asarray(d["sd"], float) / np.sqrt(np.maximum(np.asarray(d["n"], float), 1.0))
     dml = {_label(k): (d["lam"], d["mean"][i], sem[i]) for i, k in enumerate(d["points"])}
-    fig = plot_mass_size(rec.detail["curves"], dml, fit_range=paper.DM_RANGE, paper_value=1.33)
-    return {"fig3_mass_size": fig}
+    return plot_mass_size(rec.detail["curves"], dml, fit_range=paper.DM_RANGE, paper_value=1.33)
 
 
-def discuss(rec: Record, records) -> dict[str, str]:
-    """Why D_M differs (or not), from the numbers of this record."""
+def draw(rec: Record) -> dict:
+    """Fig. 3: M(R) with its fits, and D_M against λ; per length, then per node."""
+    return {
+        "fig3_mass_size": _draw(rec),
+        "fig3_mass_size_per_node": _draw(rec.detail["per_node"]),
+    }
+
+
+def _fmt(v, spec: str = ".2f") -> str:
+    return "— (not fitted)" if v is None or not np.isfinite(v) else format(v, spec)
+
+
+def _discuss(rec: Record) -> dict[str, str]:
+    """Why D_M differs (or not) under one reading, from the numbers of its record."""
     ex = rec.extra
-    pts = ", ".join(f"({k}) {e['value']:.2f}" for k, e in _jsonable(ex["D_M_points"]).items())
+    pts = ", ".join(f"({k}) {_fmt(e['value'])}" for k, e in _jsonable(ex["D_M_points"]).items())
     dm_alts = [
         a
         for a in rec.alternatives
@@ -154,11 +277,14 @@ def discuss(rec: Record, records) -> dict[str, str]:
         if a["value"] is not None and a["sigma"] and abs(a["value"] - 1.33) <= 2 * a["sigma"]
     ]
     mh = ex.get("M_at_half_RG") or [math.nan, math.nan]
+    h = ex["D_M_hollow"]
     dm = (
         f"Per point: {pts}. The paper's own fit range R/R_G ∈ [0.5, 1] with R_G = r_max sits "
         f"where the disc reaches the wire's outer loops: M(R_G/2) is only {mh[0]:.2f} to "
         f"{mh[1]:.2f} of the mass and M(R_G) = 1, so over this factor 2 in R the log-slope "
-        "is large (Fig. 3a shows M(R) and the range). The alternatives: "
+        "is large (Fig. 3a shows M(R) and the range). "
+        + (_hollow_note(h) + ". " if h["wires"] else "")
+        + "The alternatives: "
         + "; ".join(f"{a['variant']}: {_num(a['value'], a['sigma'])}" for a in dm_alts)
         + ". "
         + (
@@ -176,3 +302,54 @@ def discuss(rec: Record, records) -> dict[str, str]:
         "form and zip; a slope within 2σ of 0 would mean saturation."
     )
     return {"D_M": dm, "D_M_slope": slope}
+
+
+def discuss(rec: Record, records) -> dict[str, str]:
+    """Why D_M differs (or not), per length and per node, from the numbers of the record."""
+    pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
+    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why D_M and its saturation differ under one reading: one sentence each, from the
+    numbers of its record."""
+    ex = _jsonable(rec.extra)
+    h = ex["D_M_hollow"]
+    inner = next((a for a in rec.alternatives if a["variant"].startswith("fit on R/R_G in")), None)
+    if h["wires"] and h["wires"] == h["of"]:
+        where = h["inner"]
+        dm = (
+            f"shape: all {h['of']} wires coil into hollow rings (M(R) = 0 in the fit window), "
+            "so D_M cannot be fitted"
+            + (
+                f"; where the wire has mass it is {_num(where['value'], where['sigma'])}"
+                if where["value"] is not None
+                else ""
+            )
+        )
+    elif ex["D_M_points"] and all(v["value"] is None for v in ex["D_M_points"].values()):
+        dm = "no wire of this profile's points could be fitted"
+    else:
+        mh = ex.get("M_at_half_RG") or [math.nan, math.nan]
+        dm = (
+            f"fit range: on R/R_G ∈ [0.5, 1] the disc sweeps the outer loops (M(R_G/2) = "
+            f"{mh[0]:.2f}-{mh[1]:.2f} of the mass), a steep climb"
+            + (
+                f"; the inner range [0.1, 0.5] gives {_num(inner['value'], inner['sigma'])}"
+                if inner is not None and inner["value"] is not None
+                else ""
+            )
+            + (f"; {h['wires']} of {h['of']} wires are hollow rings" if h["wires"] else "")
+        )
+    slope = next(r for r in rec.rows if r["key"] == "D_M_slope")
+    sat = (
+        f"size: D_M(λ) jumps between stages as loops form and zip (slope "
+        f"{_num(slope['ours'], slope['sigma'])} per decade of λ)"
+    )
+    return {"D_M": dm, "D_M_slope": sat}
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

@@ -1,7 +1,8 @@
 """Fig. 4: the energy ratio γ = E_s/E_b against λ, k_b and k_s, and its exponents.
 
-Runs: ``elastic`` at :data:`crumple.paper.FIG4A_POINTS` and :data:`~crumple.paper.FIG4B_POINTS`
-(and every other elastic point, for the joint fit). Measures: ε_l, ε_b, ε_s as the paper reads
+Runs: ``elastic`` and ``elastic_per_node`` at :data:`crumple.paper.FIG4A_POINTS` and
+:data:`~crumple.paper.FIG4B_POINTS` (and every other elastic point, for the joint fit).
+Measures, under each reading of Eq. 1: ε_l, ε_b, ε_s as the paper reads
 them (per γ curve of Fig. 4's panels, per replica, pooled over the curves), three joint fits
 γ ~ λ^ε_l k_b^ε_b k_s^ε_s as alternatives, the paper's closed form (Eq. 5) at the data's
 median, and the wires that collapse into a straight rod (γ undefined). Says: rows ``eps_l``,
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -26,15 +28,18 @@ from .common import (
     _fit_log_prefactor,
     _fit_replicas,
     _jsonable,
+    _missing_points_ok,
     _num,
+    _per_node_records,
     _pool,
     _row,
+    _twin,
 )
-from .experiments import ELASTIC
+from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import STRAIGHT, Series
 
 NAME = "fig4_gamma"
-READS = (ELASTIC,)
+READS = (ELASTIC, ELASTIC_PER_NODE)
 NEEDS: tuple[str, ...] = ()
 VALUES = tuple(paper.PAPER_VALUES[k] for k in ("eps_l", "eps_l_theory", "eps_b", "eps_s"))
 FIGURES = {
@@ -46,6 +51,9 @@ FIGURES = {
     "intercept; red dotted: the paper's slope, drawn through the data in the window (the "
     "paper gives no prefactor). Straight wires (γ undefined) "
     "are left out, which leaves gaps",
+    "fig4_gamma_per_node": "Fig. 4 with confinement λ r² per node (Eq. 1 as printed), the "
+    "same points, replicas and stages. The closed form (dashed) takes the stage λ as it is: "
+    "per node it is already in Eq. (1)'s discrete moduli (per length it is λ Δs)",
 }
 _PAPER_EPS = {"lam": 0.55, "k_b": 2.6, "k_s": -3.3}
 
@@ -68,7 +76,13 @@ def _joint_fit(el: Series, g_mean, gsel, mask):
         )
     )
     ok = np.isfinite(G) & (G > 0)
-    return fit_multi_power_law(G[ok], lam=L[ok], k_b=KB[ok], k_s=KS[ok]), (L[ok], KB[ok], KS[ok])
+    try:
+        fit = fit_multi_power_law(G[ok], lam=L[ok], k_b=KB[ok], k_s=KS[ok])
+    except ValueError:  # too few points, or a factor with one value (a profile's subset)
+        nan = dict.fromkeys(("lam", "k_b", "k_s"), math.nan)
+        fit = SimpleNamespace(exponents=nan, stderrs=nan, prefactor=math.nan,
+                              residual_rms=math.nan, n_points=int(ok.sum()))  # fmt: skip
+    return fit, (L[ok], KB[ok], KS[ok])
 
 
 def _curve_rows(el: Series, gsel, nrep: int) -> tuple[list[dict], dict]:
@@ -154,15 +168,22 @@ def _rods(el: Series) -> tuple[dict, dict]:
 
 
 def measure(ctx: Context) -> Record:
-    """The exponents of γ, from the ``elastic`` store."""
+    """The exponents of γ, per length (``elastic``) and per node (``elastic_per_node``)."""
     el = ctx.series["elastic"]
-    nrep = ctx.replicas
+    pn = ctx.series["elastic_per_node"].reindex(el.keys)
+    with _missing_points_ok():
+        twin = _measure(pn, ctx.profile["per_node_replicas"])
+    return _twin(NAME, _measure(el, ctx.replicas), twin)
+
+
+def _measure(el: Series, nrep: int) -> Record:
+    """The exponents of γ, from one elastic series."""
     g_mean = _gamma_mean(el)
     lo, hi = paper.GAMMA_RANGE
     gsel = (el.lam >= lo) & (el.lam <= hi)
     everywhere = np.ones(len(el.keys), dtype=bool)
     mfit, (L, KB, KS) = _joint_fit(el, g_mean, gsel, everywhere)
-    grange = (float(L.min()), float(L.max()))
+    grange = (float(L.min()), float(L.max())) if L.size else None
     rows, eps_curves = _curve_rows(el, gsel, nrep)
     ks = np.array([k[1] for k in el.keys])
     fig4_idx = [el.index(k) for k in paper.FIG4A_POINTS + paper.FIG4B_POINTS]
@@ -183,7 +204,7 @@ def measure(ctx: Context) -> Record:
     # as the mean of ln(γ / closed form) over the fit window, so that Fig. 4a/b compare shapes
     prefactor = {}
     for k in dict.fromkeys(paper.FIG4A_POINTS + paper.FIG4B_POINTS):
-        pred = gamma_prediction(k[0], k[1], el.lam * el.ds)
+        pred = gamma_prediction(k[0], k[1], el.lam_discrete)
         g = g_mean[el.index(k)]
         ok = gsel & np.isfinite(g) & (g > 0) & np.isfinite(pred) & (pred > 0)
         prefactor[f"{k[0]:g}, {k[1]:g}"] = (
@@ -194,7 +215,9 @@ def measure(ctx: Context) -> Record:
     g_kb = [v for v in g_kb if np.isfinite(v)]
     monotonic = bool(np.all(np.diff(g_kb) > 0) or np.all(np.diff(g_kb) < 0))
     # the formula is written in Eq. (1)'s discrete moduli: per-node λ = per-length λ × Δs
-    th = gamma_exponents(np.median(KB), np.median(KS), np.median(L) * el.ds)
+    # (Series.lam_discrete); the fitted points' λ are stage values
+    scale = 1.0 if el.per_node else el.ds
+    th = gamma_exponents(np.median(KB), np.median(KS), np.median(L) * scale)
     extra = {
         "closed_form_prefactor": prefactor,
         "guide_log_prefactors": _guide_log_prefactors(el, gsel),
@@ -222,19 +245,28 @@ def measure(ctx: Context) -> Record:
         rows=tuple(rows),
         alternatives=tuple(alts),
         extra=extra,
-        detail={"lam": el.lam, "ds": el.ds, "gamma": {k: g_mean[el.index(k)] for k in el.keys}},
+        detail={
+            "lam": el.lam,
+            "lam_discrete": el.lam_discrete,
+            "gamma": {k: g_mean[el.index(k)] for k in el.keys},
+        },
     )
 
 
 def draw(rec: Record) -> dict:
-    """Fig. 4: γ against λ (a, b), k_b (c) and k_s (d), with the closed form dashed."""
+    """Fig. 4: γ against λ (a, b), k_b (c) and k_s (d), with the closed form dashed; per
+    length, then per node."""
+    return {"fig4_gamma": _draw(rec), "fig4_gamma_per_node": _draw(rec.detail["per_node"])}
+
+
+def _draw(rec: Record):
     from ..figures import plot_gamma
 
-    lam, ds, g = rec.detail["lam"], rec.detail["ds"], rec.detail["gamma"]
+    lam, lam_d, g = rec.detail["lam"], rec.detail["lam_discrete"], rec.detail["gamma"]
     pre = rec.extra["closed_form_prefactor"]
 
     def closed(k):  # the closed form times its fitted prefactor
-        return lam, pre[f"{k[0]:g}, {k[1]:g}"] * gamma_prediction(k[0], k[1], lam * ds)
+        return lam, pre[f"{k[0]:g}, {k[1]:g}"] * gamma_prediction(k[0], k[1], lam_d)
 
     a_c = {f"k_b={k[0]:g}": (lam, g[k]) for k in paper.FIG4A_POINTS}
     b_c = {f"k_s={k[1]:g}": (lam, g[k]) for k in paper.FIG4B_POINTS}
@@ -274,11 +306,16 @@ def draw(rec: Record) -> dict:
         notes=("", "", "" if rec.extra["gamma_kb_monotonic_1000"]
                else "γ(k_b) is not monotonic at λ = 1000", ""),
     )  # fmt: skip
-    return {"fig4_gamma": fig}
+    return fig
 
 
 def notes(rec: Record) -> list[str]:
-    """The report's paragraph on the stages where γ is undefined."""
+    """The report's paragraphs on the stages where γ is undefined, per length and per node."""
+    pn = rec.detail.get("per_node")
+    return _notes(rec) + ([] if pn is None else ["Per node: " + _notes(pn)[0]])
+
+
+def _notes(rec: Record) -> list[str]:
     rods = rec.extra.get("straight_rods", {})
     return [
         f"γ = E_s/E_b is left undefined on straight wires (every joint below "
@@ -329,7 +366,13 @@ def _soft_text(ex) -> str:
 
 
 def discuss(rec: Record, records) -> dict[str, str]:
-    """Why the exponents of γ differ, from the numbers of this record."""
+    """Why the exponents of γ differ, per length and per node, from the numbers of the record."""
+    pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
+    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+
+
+def _discuss(rec: Record) -> dict[str, str]:
+    """Why the exponents of γ differ under one reading, from the numbers of its record."""
     alts, ex = rec.alternatives, rec.extra
     gf = ex["gamma_fit"]
     th = ex["gamma_formula_exponents"]
@@ -344,8 +387,12 @@ def discuss(rec: Record, records) -> dict[str, str]:
         f"Per γ(λ) curve (k_b, k_s): {curve_txt}. " + soft_text + " Joint fits of "
         "γ ~ λ^ε_l k_b^ε_b k_s^ε_s (alternatives table): "
         + "; ".join(f"{a['variant']}: {_num(a['value'], a['sigma'])}" for a in alt_l)
-        + f"; the joint fit to all points leaves an rms residual of {gf['residual_rms']:.2f} in "
-        f"ln γ (a factor {math.exp(gf['residual_rms']):.2g} about the power law)."
+        + (
+            f"; the joint fit to all points leaves an rms residual of {gf['residual_rms']:.2f} "
+            f"in ln γ (a factor {math.exp(gf['residual_rms']):.2g} about the power law)."
+            if gf["residual_rms"] is not None and np.isfinite(gf["residual_rms"])
+            else "; the joint fit to all points could not be made (too few points)."
+        )
     )
     t1 = {a["quantity"]: a for a in alts if a["variant"].startswith("Table 1")}
 
@@ -375,3 +422,52 @@ def discuss(rec: Record, records) -> dict[str, str]:
     out["eps_s"] = out["eps_b"]
     out["eps_l_theory"] = out["eps_l"]
     return out
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why the exponents of γ differ under one reading: one sentence each, from its record."""
+    ex = _jsonable(rec.extra)
+    curves = [v["value"] for v in ex["eps_curves"]["eps_l"].values() if v["value"] is not None]
+    spread = (
+        f"the {len(curves)} γ(λ) curves give {min(curves):.2f} to {max(curves):.2f}"
+        if curves
+        else "no γ(λ) curve could be fitted"
+    )
+    eps_l = f"fit range: over λ ∈ [500, 2000] {spread}"
+    lr = [v for k, v in ex["length_ratio_1000"].items() if k.endswith(", 2000") and v is not None]
+    t1 = {a["quantity"]: a for a in rec.alternatives if a["variant"].startswith("Table 1")}
+    th = ex["gamma_formula_exponents"]
+
+    def other(q, key):
+        a = t1.get(q)
+        got = "" if a is None or a["value"] is None else f" gives {_num(a['value'], a['sigma'])}"
+        return (
+            f"fit range: at k_s = 2e3 (below Table 1's range) the wire is compressed to "
+            f"L/L0 = {min(lr):.2f}-{max(lr):.2f} at λ = 1000; Table 1's range (k_s ≥ 1e4){got}"
+            f", the paper's closed form {th[key]:.2f}"
+            if lr and th.get(key) is not None
+            else "not measured at this profile's points"
+        )
+
+    out = {"eps_l": eps_l, "eps_l_theory": eps_l, "eps_b": other("ε_b", "eps_b"),
+           "eps_s": other("ε_s", "eps_s")}  # fmt: skip
+    rods = ex["straight_rods"]
+    for key, pts in (("eps_b", paper.FIG4A_POINTS), ("eps_s", paper.FIG4B_POINTS)):
+        row = next(r for r in rec.rows if r["key"] == key)
+        flat = [rods[f"{k[0]:g}, {k[1]:g}"] for k in pts if f"{k[0]:g}, {k[1]:g}" in rods]
+        if row["ours"] is None:  # nothing fitted: why
+            out[key] = "no curve of this panel could be fitted at this profile's points"
+        if row["ours"] is None and flat:  # γ undefined on rods: no curve to fit
+            out[key] = (
+                f"collapse: {len(flat)} of the {len(pts)} wires of this panel collapse into "
+                f"straight rods (L/L0 down to {min(v['length_ratio'] for v in flat):.3f}) from "
+                f"λ = {min(v['from_lam'] for v in flat):.3g}, where γ is undefined, so no "
+                "curve can be fitted"
+            )
+    return out
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

@@ -1,7 +1,8 @@
 """Fig. 6: the radius exponent α with plasticity, against s and against θ_p.
 
-Runs: ``plastic`` (the Fig. 2 wire with s = 0.05..0.8 at θ_p = 0.1, and θ_p scanned at
-s = 0.4). Reads the elastic α at the same (k_b, k_s) from :mod:`.fig5_radius`. Measures: α per
+Runs: ``plastic`` and ``plastic_per_node`` (the Fig. 2 wire with s = 0.05..0.8 at θ_p = 0.1,
+and θ_p scanned at s = 0.4). Reads the elastic α at the same (k_b, k_s) from
+:mod:`.fig5_radius` (of the same reading). Measures, under each reading of Eq. 1: α per
 (s, θ_p), the fraction of joints beyond θ_p, the two trends of the caption. Says: rows
 ``alpha_s0.05``, ``alpha_s0.2``, ``alpha_s0.4``, ``alpha_saturation`` and two claims.
 """
@@ -14,12 +15,23 @@ import numpy as np
 
 from .. import paper
 from ..geometry import turning_angles
-from .common import Context, Estimate, Record, _jsonable, _row, _trend, _trend_verdict
-from .experiments import PLASTIC
+from .common import (
+    Context,
+    Estimate,
+    Record,
+    _jsonable,
+    _missing_points_ok,
+    _per_node_records,
+    _row,
+    _trend,
+    _trend_verdict,
+    _twin,
+)
+from .experiments import PLASTIC, PLASTIC_PER_NODE
 from .series import Series, _alpha
 
 NAME = "fig6_plasticity"
-READS = (PLASTIC,)
+READS = (PLASTIC, PLASTIC_PER_NODE)
 NEEDS = ("fig5_radius",)
 VALUES = tuple(
     paper.PAPER_VALUES[k] for k in ("alpha_s0.05", "alpha_s0.2", "alpha_s0.4", "alpha_saturation")
@@ -29,7 +41,9 @@ FIGURES = {
     f"{paper.FIG2[1]:g}) with plasticity s at θ_p = {paper.PLASTIC_THETA_P:g} rad (ours: the "
     "paper does not give θ_p), and without (elastic); legend: α per s, ±σ, fitted over λ ∈ "
     f"[{paper.ALPHA_RANGE[0]:g}, {paper.ALPHA_RANGE[1]:g}] (grey); (b) |α| against θ_p at "
-    "s = 0.4, bars ±2σ"
+    "s = 0.4, bars ±2σ",
+    "fig6_plasticity_per_node": "Fig. 6 with confinement λ r² per node (Eq. 1 as printed), "
+    "the same s, θ_p, replicas and stages; elastic: the per-node wire of Fig. 5",
 }
 _ROWS = ("alpha_s0.05", "alpha_s0.2", "alpha_s0.4", "alpha_saturation")
 
@@ -92,10 +106,18 @@ def _theta_claim(inset) -> dict:
 
 
 def measure(ctx: Context) -> Record:
-    """α with plasticity, from the ``plastic`` store (and the elastic α of Fig. 5)."""
+    """α with plasticity, per length (``plastic``) and per node (``plastic_per_node``), each
+    beside the elastic α of Fig. 5 under the same reading."""
     pl = ctx.series["plastic"]
-    nrep = ctx.replicas
+    pn = ctx.series["plastic_per_node"].reindex(pl.keys)
     fig5 = ctx.records["fig5_radius"]
+    with _missing_points_ok():
+        twin = _measure(pn, ctx.profile["per_node_replicas"], fig5.detail["per_node"])
+    return _twin(NAME, _measure(pl, ctx.replicas, fig5), twin)
+
+
+def _measure(pl: Series, nrep: int, fig5: Record) -> Record:
+    """α with plasticity from one plastic series and the Fig. 5 record of the same reading."""
     plastic_alpha = {k: _alpha(pl, pl.index(k)) for k in pl.keys}
     rows = []
     for s_val, key in ((0.05, "alpha_s0.05"), (0.2, "alpha_s0.2"), (0.4, "alpha_s0.4")):
@@ -147,7 +169,14 @@ def measure(ctx: Context) -> Record:
 
 
 def draw(rec: Record) -> dict:
-    """Fig. 6: R_g against λ per s, and the inset α against θ_p."""
+    """Fig. 6: R_g against λ per s, and the inset α against θ_p; per length, then per node."""
+    return {
+        "fig6_plasticity": _draw(rec),
+        "fig6_plasticity_per_node": _draw(rec.detail["per_node"]),
+    }
+
+
+def _draw(rec: Record):
     from ..figures import plot_plasticity
 
     inset = tuple(zip(*rec.detail["inset"], strict=True))
@@ -161,19 +190,26 @@ def draw(rec: Record) -> dict:
         elif label == "elastic":
             label = f"elastic: α = {el.value:.3f} ± {el.sigma:.3f}"
         curves[label] = xy
-    fig = plot_plasticity(curves, inset, fit_range=paper.ALPHA_RANGE, paper_inset=0.26)
-    return {"fig6_plasticity": fig}
+    return plot_plasticity(curves, inset, fit_range=paper.ALPHA_RANGE, paper_inset=0.26)
 
 
 def discuss(rec: Record, records) -> dict[str, str]:
-    """θ_p is ours: how many joints are plastic, against the elastic α."""
+    """θ_p is ours: how many joints are plastic, against the elastic α; per length and per
+    node."""
+    pl = _discuss(rec, records)
+    pn = _discuss(rec.detail["per_node"], _per_node_records(records))
+    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+
+
+def _discuss(rec: Record, records) -> dict[str, str]:
     ex = rec.extra
     reach = ex.get("plastic_fraction_beyond_theta_p", {})
     pa = _jsonable(ex.get("plastic_alpha", {}))
     alpha_points = _jsonable(records["fig5_radius"].extra["alpha_points"])
     el_alpha = alpha_points.get(f"{paper.FIG2[0]:g}, {paper.FIG2[1]:g}", {})
     s_list = "; ".join(
-        f"{k}: α = {v['value']:.3f}, {100 * reach.get(k, math.nan):.0f} % of joints plastic"
+        f"{k}: α = {math.nan if v['value'] is None else v['value']:.3f}, "
+        f"{100 * reach.get(k, math.nan):.0f} % of joints plastic"
         for k, v in pa.items()
     )
     text = (
@@ -185,3 +221,38 @@ def discuss(rec: Record, records) -> dict[str, str]:
         "is checked in the claims table."
     )
     return dict.fromkeys(_ROWS, text)
+
+
+def _reason(rec: Record) -> dict[str, str]:
+    """Why α with plasticity differs under one reading: one sentence per row, from its
+    record (θ_p is ours, and where few joints yield α is the elastic one)."""
+    ex = rec.extra
+    reach = ex["plastic_fraction_beyond_theta_p"]
+    el = rec.detail["elastic_alpha"]
+    out = {}
+    for key, s_val in (("alpha_s0.05", 0.05), ("alpha_s0.2", 0.2), ("alpha_s0.4", 0.4)):
+        k = f"s={s_val:g}, theta_p={paper.PLASTIC_THETA_P:g}"
+        fr = reach.get(k, math.nan)
+        out[key] = (
+            f"choice: θ_p = {paper.PLASTIC_THETA_P:g} rad is ours ({100 * fr:.0f} % of joints "
+            f"plastic); the elastic wire gives α = {el.value:.3f}"
+        )
+    sat = next(r for r in rec.rows if r["key"] == "alpha_saturation")
+    for r in rec.rows:
+        if r["ours"] is None:
+            out[r["key"]] = "not run at this profile's points"
+    top = max((k for k in reach if k.startswith("s=0.4,")), key=lambda k: float(k.split("=")[-1]))
+    out["alpha_saturation"] = (
+        f"choice: θ_p is ours; at the largest, θ_p = {top.split('=')[-1]} rad, "
+        f"{100 * reach[top]:.0f} % of joints are plastic, and the elastic wire gives "
+        f"|α| = {abs(el.value):.3f}"
+        if sat["ours"] is not None
+        else "not run at this profile's points"
+    )
+    return out
+
+
+def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
+    """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
+    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}

@@ -12,7 +12,9 @@ A section is a module (or any object) with these attributes::
     draw(record: Record) -> dict[str, Figure]  from the record alone
 
 and optionally ``discuss(record, records) -> dict[row key, str]`` (the discussion of its
-rows) and ``notes(record) -> list[str]`` (paragraphs under "Runs").
+rows), ``notes(record) -> list[str]`` (paragraphs under "Runs") and
+``summarise(record, records) -> dict[row key, dict[reading, str]]`` (the one-minute summary's
+reason why a row differs, per reading ``"per-length"`` / ``"per-node"``, :mod:`.summary`).
 
 Adding a study is one module and one line: append it to :data:`SECTIONS`, or, from outside
 the package (a plugin, a test), call :func:`register`. The order of :data:`SECTIONS` is the

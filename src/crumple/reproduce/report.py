@@ -8,6 +8,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import paper
 from ..storage import atomic_write_text
 from . import registry
 from .analysis import Analysis, _read_profile, analyse
@@ -81,7 +82,8 @@ def write_report(
 
 def check_report(out, *, sections=None) -> list[str]:
     """What a complete report lacks: figure files, table rows (one per value the sections
-    declare) with a number and a verdict. Empty when complete."""
+    declare) with a number and a verdict, and for each of the paper's numbers a verdict per
+    node (issue 14). Empty when complete."""
     out = Path(out)
     secs = registry.sections() if sections is None else tuple(sections)
     values = [v for s in secs for v in s.VALUES]
@@ -102,6 +104,8 @@ def check_report(out, *, sections=None) -> list[str]:
                 missing.append(f"table row {v.key}")
             elif r.get("verdict") in (None, "not measured"):
                 missing.append(f"table row {v.key} has no value")
+            elif v.key in paper.PAPER_VALUES and not (r.get("per_node") or {}).get("verdict"):
+                missing.append(f"table row {v.key} has no per-node verdict")
     if (out / "report.md").is_file():
         md = (out / "report.md").read_text()
         for v in values:

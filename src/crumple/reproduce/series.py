@@ -78,9 +78,51 @@ class Series:
     hard_core: float
     obs: dict[str, np.ndarray] = field(default_factory=dict)
     iterations: np.ndarray | None = None  # (point, replica, lam): Newton iterations, Powell sweeps
+    confinement: str = paper.CONFINEMENT
 
     def index(self, key) -> int:
         return self.keys.index(tuple(float(k) for k in key))
+
+    @property
+    def per_node(self) -> bool:
+        """Confinement λ r² per node (Eq. 1 as printed)."""
+        return self.confinement == paper.PER_NODE
+
+    @property
+    def lam_discrete(self) -> np.ndarray:
+        """λ in Eq. (1)'s discrete moduli (per node) ``[energy/length²]``: the stage λ for a
+        per-node wire, λ Δs for a per-length one (their trap energies agree then)."""
+        return self.lam if self.per_node else self.lam * self.ds
+
+    def reindex(self, keys: list[tuple]) -> Series:
+        """This series over ``keys`` (those of another experiment): the points it lacks are
+        NaN (never run: ``done`` false), so a measure over a missing point is "not measured"."""
+        keys = [tuple(float(v) for v in k) for k in keys]
+        if keys == self.keys:
+            return self
+        at = [self.keys.index(k) if k in self.keys else -1 for k in keys]
+
+        def take(a: np.ndarray) -> np.ndarray:
+            fill = False if a.dtype == bool else np.nan
+            out = np.full((len(keys), *a.shape[1:]), fill, dtype=a.dtype)
+            for i, j in enumerate(at):
+                if j >= 0:
+                    out[i] = a[j]
+            return out
+
+        return Series(
+            keys=keys,
+            lam=self.lam,
+            positions=take(self.positions),
+            energies={k: take(v) for k, v in self.energies.items()},
+            converged=take(self.converged),
+            max_force=take(self.max_force),
+            done=take(self.done),
+            incomplete=self.incomplete,
+            hard_core=self.hard_core,
+            obs={k: take(v) for k, v in self.obs.items()},
+            confinement=self.confinement,
+        )
 
     @property
     def ds(self) -> float:
@@ -121,6 +163,7 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
         incomplete=incomplete,
         hard_core=hard_core,
         iterations=ds["iterations"].values if "iterations" in ds else None,
+        confinement=str(m.get("wire", {}).get("confinement", paper.CONFINEMENT)),
     )
     s.obs.update({k: ds[k].values for k in OBSERVABLES})
     s.obs.update({k: s.obs[v] for k, v in _ALIASES.items()})
