@@ -44,6 +44,7 @@ class PowerLawFit:
 
     Examples
     --------
+    >>> from crumple.fit import fit_power_law
     >>> x = np.array([1.0, 2.0, 4.0, 8.0])
     >>> r = fit_power_law(x, 3 * x**0.5)
     >>> round(r.exponent, 12), round(r.prefactor, 12), r.fit_range, r.n_points
@@ -66,6 +67,7 @@ class PowerLawFit:
     def __call__(self, x):
         """Evaluate ``prefactor * x**exponent``.
 
+        >>> from crumple.fit import fit_power_law
         >>> fit = fit_power_law([1.0, 2.0, 4.0], [3.0, 12.0, 48.0])
         >>> float(fit(3.0))
         27.0
@@ -75,6 +77,7 @@ class PowerLawFit:
     def to_dict(self) -> dict:
         """JSON-able summary (plain Python floats and ints).
 
+        >>> from crumple.fit import fit_power_law
         >>> sorted(fit_power_law([1.0, 2.0, 4.0], [1.0, 2.0, 4.0]).to_dict())[:3]
         ['ci', 'confidence', 'exponent']
         """
@@ -115,6 +118,7 @@ class MeanEstimate:
 
     Examples
     --------
+    >>> from crumple.fit import mean_confidence_interval
     >>> m = mean_confidence_interval([1.0, 2.0, 3.0])
     >>> m.value, m.n_samples, m.method
     (2.0, 3, 't')
@@ -154,6 +158,7 @@ class MultiPowerLawFit:
 
     Examples
     --------
+    >>> from crumple.fit import fit_multi_power_law
     >>> lam = np.array([1.0, 2.0, 4.0, 1.0, 2.0, 4.0])
     >>> kb = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
     >>> r = fit_multi_power_law(2 * lam**0.5 * kb**2, lam=lam, k_b=kb)
@@ -210,6 +215,7 @@ class CollapseFit:
 
     Examples
     --------
+    >>> from crumple.fit import collapse
     >>> lam = np.geomspace(1, 100, 8)
     >>> curves = {g: (lam, lam**-0.25 * g**1.2) for g in (1.0, 2.0, 4.0)}
     >>> round(collapse(curves, reference=1.0).exponent, 9)
