@@ -286,6 +286,7 @@ def minimize_wire(
     rng: np.random.Generator | None = None,
     rest_angles=None,
     fixed=None,
+    anticipate_contacts: bool = True,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -316,6 +317,12 @@ def minimize_wire(
     fixed : array_like of bool, shape (wire.n_nodes,), optional
         Nodes held at their starting positions (Newton only): a clamped end is its two end
         nodes. With any node fixed, no rigid motion is a zero mode.
+    anticipate_contacts : bool
+        Newton: let the model see the hard core of the pairs a step is about to enter (its
+        curvature at the edge, as a one-sided spring: :meth:`WireEnergy.barriers`), so that a
+        step stops at a contact instead of being cut by collision detection. The energy and
+        the equilibria are the same; only the path to them changes. False: the engine before
+        issue 9's item 3, kept for comparison (``benchmarks/bench_scale.py contacts``).
 
     Examples
     --------
@@ -366,6 +373,7 @@ def minimize_wire(
             metric=node_lengths(wire),
             zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
             fixed=fixed,
+            barriers=energy.barriers if anticipate_contacts else None,
         )
     if method == "powell":
         if rng is None:
