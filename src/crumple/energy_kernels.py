@@ -430,13 +430,14 @@ def _pattern_where(rows, cols, indptr, indices):
 
 
 @njit(cache=True)
-def _barrier_rows(pos, step, ks, js, width):
+def _barrier_rows(pos, step, ks, js, width, margin=-1.0):
     """Candidate pairs outside the core (D >= d) that ``step`` could bring inside it.
 
     A pair's distance falls by at most |step_k| + max(|step_j|, |step_j+1|); those that can
-    reach d get a row a = ∇D (over the flattened coordinates 2 * node + axis: node k, segment
-    ends j and j + 1) and an offset r = d - D <= 0, so that the linearised distance after the
-    step, D + aᵀs, is below d exactly when aᵀs < r.
+    reach d, and (with ``margin`` >= 0) whose linearised distance after the step is below
+    d + margin (D - d), get a row a = ∇D (over the flattened coordinates 2 * node + axis: node
+    k, segment ends j and j + 1) and an offset r = d - D <= 0, so that the linearised distance
+    after a step s, D + aᵀs, is below d exactly when aᵀs < r.
     """
     m = ks.shape[0]
     index = np.empty((m, 6), dtype=np.int64)
@@ -456,6 +457,11 @@ def _barrier_rows(pos, step, ks, js, width):
         if dist - sk - max(sa, sb) >= width:
             continue
         nx, ny = vx / dist, vy / dist
+        if margin >= 0.0:  # keep only pairs the step itself drives most of the way in
+            lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
+            lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
+            if lin >= width + margin * (dist - width):
+                continue
         index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
         index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
         index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
