@@ -161,15 +161,18 @@ def _back_unpermute(n, lp, li, lx, perm, x, top):
 
 
 @njit(cache=True)
-def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, rounds, window):
+def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, rounds, window,
+                  max_new):  # fmt: skip
     """Minimise gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)² given p0 = -A⁻¹g (A factored).
 
     An active-set iteration on S, the springs the step enters. For a given S, by
     Sherman–Morrison–Woodbury, s = p0 + A⁻¹U μ with U = [a_i]_S and
     (K⁻¹ + UᵀA⁻¹U) μ = r_S - Uᵀp0. Each round drops the springs of S that the step no longer
     enters (a_iᵀs >= r_i, i.e. μ_i <= 0) and adds, of those it enters, the ones it enters first
-    along s: fraction r_i / a_iᵀs within ``window`` of the first (a long step through a soft
-    mode would enter many that the first contacts then keep it from). Each A⁻¹a_i is one solve
+    along s: fraction r_i / a_iᵀs within ``window`` of the first, at most ``max_new`` of them
+    in list order. A long step through a soft mode enters many springs that the first contacts
+    then keep it from, each costing a solve: measured, at most 2 per round halved the CPU of an
+    N = 1000 ramp against no limit (1 and 4 were slower than 2). Each A⁻¹a_i is one solve
     with the factor, computed once, and only the products a_jᵀA⁻¹a_i are kept: a round costs
     O(m |S| + |S|³). Converged when a round changes nothing: s is then the exact minimiser.
     Returns (s, converged).
@@ -201,15 +204,17 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
             if not active[j] and t < offset[j]:
                 first = min(first, offset[j] / t)
         changed = False
+        added = 0
         k = 0
         for j in range(m):
             if active[j]:
                 if now[j] >= offset[j]:
                     active[j] = False
                     changed = True
-            elif now[j] < offset[j] and offset[j] / now[j] <= first + window:
+            elif now[j] < offset[j] and offset[j] / now[j] <= first + window and added < max_new:
                 active[j] = True
                 changed = True
+                added += 1
             if active[j]:
                 k += 1
         if not changed:
@@ -382,7 +387,8 @@ class Factorization:
         b = np.ascontiguousarray(b, dtype=np.float64).ravel()
         return _solve(s.n, s.lp, s.ai_l, self._lx, self._d, s.perm, b)
 
-    def solve_springs(self, p0, index, value, offset, stiffness, *, rounds=50, window=0.1):
+    def solve_springs(self, p0, index, value, offset, stiffness, *, rounds=50, window=0.1,
+                      max_new=2):  # fmt: skip
         """The minimiser s of gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)², p0 = -A⁻¹g.
 
         A is the factored matrix (positive definite); the one-sided springs have rows a_i with
@@ -390,7 +396,8 @@ class Factorization:
         (<= 0: the springs start beyond s = 0), k_i = ``stiffness[i]``. Returns
         ``(s, converged)``: converged when the active set {i: a_iᵀs < r_i} was found within
         ``rounds`` rounds (springs are added in the order the step enters them, those within
-        ``window`` of the first together; see ``_spring_solve``).
+        ``window`` of the first together, at most ``max_new`` per round; see
+        ``_spring_solve``).
 
         >>> f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
         >>> s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0]]), np.array([[-1.0]]),
@@ -406,6 +413,7 @@ class Factorization:
             np.ascontiguousarray(value, dtype=np.float64),
             np.ascontiguousarray(offset, dtype=np.float64),
             np.ascontiguousarray(stiffness, dtype=np.float64), int(rounds), float(window),
+            int(max_new),
         )  # fmt: skip
 
     def negative_direction(self) -> np.ndarray | None:
