@@ -321,8 +321,10 @@ def minimize_wire(
         Newton: let the model see the hard core of the pairs a step is about to enter (its
         curvature at the edge, as a one-sided spring: :meth:`WireEnergy.barriers`), so that a
         step stops at a contact instead of being cut by collision detection. The energy and
-        the equilibria are the same; only the path to them changes. False: the engine before
-        issue 9's item 3, kept for comparison (``benchmarks/bench_scale.py contacts``).
+        the equilibrium and stability criteria are the same; only the path changes, and with
+        it, after a snap-through, which local minimum a stage reaches (docs/performance.md,
+        "Branches"). False: the engine before issue 9's item 3, kept for comparison
+        (``benchmarks/bench_scale.py contacts``).
 
     Examples
     --------
