@@ -6,6 +6,7 @@
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
     python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
     python benchmarks/bench_scale.py compare         # stage energies, new vs landed
+    python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -151,6 +152,49 @@ def bench_cold(n: int = 10_000, lam: float = 200.0, maxiter: int = 2000):
           f"converged {r.converged}: {r.message}")  # fmt: skip
 
 
+def _ramp_without_springs(wire, seed=0):
+    """``run_ramp`` with ``minimize_wire(anticipate_contacts=False)``: the engine before the
+    one-sided contact springs, run in the same process for the comparison."""
+    import functools
+
+    import crumple.protocol as protocol
+
+    saved = protocol.minimize_wire
+    protocol.minimize_wire = functools.partial(saved, anticipate_contacts=False)
+    try:
+        return run_ramp(wire, seed=seed)
+    finally:
+        protocol.minimize_wire = saved
+
+
+def bench_contacts(ns=()):
+    print("== contact stages: the Newton model sees the contacts a step enters (on) or not (off),"
+          " default schedule, seed 0 ==")  # fmt: skip
+    print("  wire | springs | its / contact stage (stages) | its / smooth stage | total its | "
+          "CPU s | ms / it | converged | E_final")  # fmt: skip
+    wires = {
+        "N = 100, k_b = 5, k_s = 5e5 (default)": Wire(k_b=5, k_s=5e5),
+        "N = 100 per-node, k_b = 5, k_s = 5e5": Wire(k_b=5, k_s=5e5, confinement="per-node"),
+        "N = 100 per-node, k_b = 1, k_s = 1e4": Wire(k_b=1, k_s=1e4, confinement="per-node"),
+    }
+    wires.update({f"N = {n} continuum": continuum_wire(n) for n in ns})
+    run_ramp(Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label, wire in wires.items():
+            for on in (True, False):
+                r, t = cpu(lambda w=wire, on=on: run_ramp(w, seed=0) if on
+                           else _ramp_without_springs(w))  # fmt: skip
+                contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
+                smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
+                its = sum(s.result.iterations for s in r.stages)
+                print(f"  {label} | {'on' if on else 'off'} | "
+                      f"{np.mean(contact) if contact else 0:.1f} ({len(contact)}) | "
+                      f"{np.mean(smooth) if smooth else 0:.1f} | {its} | {t:.2f} | "
+                      f"{t / its * 1e3:.2f} | {sum(s.result.converged for s in r.stages)}/"
+                      f"{len(r.stages)} | {r.stages[-1].energy.total:.10f}",
+                      flush=True)  # fmt: skip
+
+
 def bench_compare():
     print("== stage energies of default-schedule ramps (N = 100, seed 0): new vs landed ==")
     from crumple.model import Plasticity
@@ -186,5 +230,7 @@ if __name__ == "__main__":
         bench_cold()
     elif what == "compare":
         bench_compare()
+    elif what == "contacts":
+        bench_contacts([int(v) for v in sys.argv[2:]])
     else:
         raise SystemExit(__doc__)

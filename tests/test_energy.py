@@ -893,3 +893,42 @@ def test_rest_angles_are_validated():
         WireEnergy(wire, 1.0, rest_angles=np.full(4, np.nan))
     with pytest.raises(ValueError, match="rest_angle_sd"):
         Wire(k_b=1, k_s=1e4, rest_angle_sd=-0.1)
+
+
+# --------------------------------------------------------------------------------------------
+# The barriers a step may enter (the Newton model's one-sided springs)
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(seed):
+    """Staggered hairpin 3d apart: lowering strand B by 2.5 d could bring each of its 2m - 1
+    pairs inside the core, so each gets a row a = ∇D (checked by finite differences of the
+    exact node-segment distance), offset d - D = -2d and stiffness ε b''(1)/d² = 2ε/d²;
+    a step of 0.5 d reaches none; pairs already inside the core are the Hessian's, not rows."""
+    from crumple.geometry import point_segment_distance
+
+    m, seg, d, eps = 5, 0.01, 1e-5, 1e-3
+    pos = staggered_hairpin(m, seg, 3 * d)
+    w = Wire(k_b=1.0, k_s=1e3, n_segments=2 * m, hard_core=d, hard_core_energy=eps)
+    energy = WireEnergy(w, lam=1.0)
+    step = np.zeros_like(pos)
+    step[m + 1 :, 1] = -2.5 * d
+    index, value, offset, stiff = energy.barriers(pos, step)
+    assert len(offset) == 2 * m - 1
+    np.testing.assert_allclose(offset, -2 * d, rtol=1e-9)
+    np.testing.assert_allclose(stiff, 2 * eps / d**2)
+    rng = np.random.default_rng(seed)
+    v = rng.standard_normal(pos.shape)
+    h = 1e-9
+    for row, val in zip(index, value, strict=True):
+        k, j = row[0] // 2, row[2] // 2
+        def dist(x, k=k, j=j):
+            return point_segment_distance(x[k], x[j], x[j + 1])
+
+        fd = (dist(pos + h * v) - dist(pos - h * v)) / (2 * h)
+        assert val @ v.ravel()[row] == pytest.approx(fd, rel=1e-5, abs=1e-9)
+        assert dist(pos) + val @ step.ravel()[row] == pytest.approx(0.5 * d, rel=1e-6)
+    assert len(energy.barriers(pos, 0.2 * step)[2]) == 0
+    inside = staggered_hairpin(m, seg, 0.5 * d)
+    assert len(energy.barriers(inside, step)[2]) == 0

@@ -98,3 +98,67 @@ def test_reordering_keeps_a_chain_band_free_of_fill(n):
     solver = LDLT()
     solver.factorize(a)
     assert solver.symbolic(a).l_nnz <= 2 * n
+
+
+# --------------------------------------------------------------------------------------------
+# One-sided springs (the Newton model of barriers a step is about to enter)
+# --------------------------------------------------------------------------------------------
+
+
+def _spring_kkt_minimiser(a, g, rows, offset, stiff):
+    """The minimiser of gᵀs + ½ sᵀAs + Σ k/2 max(0, r - a_iᵀs)² by enumerating active sets:
+    the one whose solution is consistent (the model is strictly convex: exactly one is)."""
+    m = len(offset)
+    for mask in range(2**m):
+        act = [(mask >> i) & 1 == 1 for i in range(m)]
+        h, rhs = a.copy(), -g.copy()
+        for i in range(m):
+            if act[i]:
+                h += stiff[i] * np.outer(rows[i], rows[i])
+                rhs += stiff[i] * offset[i] * rows[i]
+        s = np.linalg.solve(h, rhs)
+        if all((rows[i] @ s < offset[i]) == act[i] for i in range(m)):
+            return s
+    raise AssertionError("no consistent active set")
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
+       logk=st.floats(0.0, 7.0))  # fmt: skip
+def test_spring_solve_is_the_minimiser_of_the_piecewise_model(seed, n, m, logk):
+    rng = np.random.default_rng(seed)
+    q = rng.standard_normal((n, n))
+    a = q @ q.T + 0.5 * np.eye(n)
+    g = rng.standard_normal(n)
+    w = min(3, n)
+    index = np.array([rng.choice(n, w, replace=False) for _ in range(m)])
+    value = rng.standard_normal((m, w))
+    offset = -rng.uniform(0.0, 0.5, m)  # every spring starts beyond the current point
+    stiff = np.full(m, 10.0**logk)
+    rows = np.zeros((m, n))
+    for i in range(m):
+        rows[i, index[i]] = value[i]
+    f = LDLT().factorize(sp.csc_matrix(a))
+    p0 = f.solve(-g)
+    s, ok = f.solve_springs(p0, index, value, offset, stiff)
+    if ok:
+        want = _spring_kkt_minimiser(a, g, rows, offset, stiff)
+        np.testing.assert_allclose(s, want, rtol=1e-6, atol=1e-8 * (1 + np.abs(want).max()))
+    # converged or not, the model is zero at s = 0 and the step lowers it: a descent direction
+    model = g @ s + 0.5 * s @ a @ s + 0.5 * np.sum(stiff * np.maximum(0, offset - rows @ s) ** 2)
+    if ok:
+        assert model <= 1e-12 * (1 + abs(g @ p0))
+        assert g @ s < 0 or np.allclose(g, 0)
+
+
+def test_spring_solve_stops_a_step_at_a_stiff_spring_and_ignores_far_ones():
+    """Identity model, step p0 = (1, 1): a stiff spring at x_0 = 0.25 holds that entry there
+    (less the spring's give, force / k); a spring the step does not reach stays inactive."""
+    f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
+    index = np.array([[0], [1]])
+    value = np.array([[-1.0], [-1.0]])
+    offset = np.array([-0.25, -2.0])
+    s, ok = f.solve_springs(np.ones(2), index, value, offset, np.full(2, 1e9))
+    assert ok
+    assert s[0] == pytest.approx(0.25 + 0.75 / (1 + 1e9), rel=1e-12)
+    assert s[1] == 1.0

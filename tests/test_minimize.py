@@ -524,3 +524,61 @@ def test_max_force_and_resolution():
     assert resolution(1.0) == 16 * np.finfo(float).eps
     assert resolution(-3.0) == 48 * np.finfo(float).eps
     assert resolution(0.0) > 0
+
+
+# --------------------------------------------------------------------------------------------
+# Barriers seen before they are entered (one-sided springs in the Newton model)
+# --------------------------------------------------------------------------------------------
+
+
+def _wall_problem(d=1e-3, eps=1e-2, target=-1.0):
+    """A point pulled towards x = target < 0 by a unit spring, against a wall at 0 whose
+    barrier ε b(x/d), b(u) = (1 - u)²/u, acts only within d of it (C¹ at x = d, like the hard
+    core). Returns fun, hess, step_limit (never reach the wall) and barriers."""
+
+    def fun(x):
+        e, g = 0.5 * (x[0] - target) ** 2, x[0] - target
+        if x[0] <= 0:
+            return math.inf, np.array([g])
+        if x[0] < d:
+            u = x[0] / d
+            e += eps * (1 - u) ** 2 / u
+            g += eps * (1 - 1 / u**2) / d
+        return e, np.array([g])
+
+    def hess(x):
+        h = 1.0 + (2 * eps / (x[0] / d) ** 3 / d**2 if 0 < x[0] < d else 0.0)
+        return np.array([[h]])
+
+    def step_limit(x, p):
+        return 1.0 if x[0] + p[0] > 0 else x[0] / -p[0]
+
+    def barriers(x, p):
+        if x[0] < d or x[0] + p[0] >= d:
+            return np.zeros((0, 1), int), np.zeros((0, 1)), np.zeros(0), np.zeros(0)
+        return np.array([[0]]), np.array([[1.0]]), np.array([d - x[0]]), np.array([2 * eps / d**2])
+
+    return fun, hess, step_limit, barriers
+
+
+def test_barrier_seen_before_it_is_entered_saves_the_crawl_to_the_wall():
+    """Without the spring, every step runs into the wall, is cut to 0.8 of the way and the
+    point crawls towards it (a factor 5 per iteration) before the barrier's curvature is seen;
+    with it, the first step stops at the barrier's edge. Same minimum, never at the wall."""
+    fun, hess, step_limit, barriers = _wall_problem()
+    seen = []
+    runs = {}
+    for name, b in (("plain", None), ("springs", barriers)):
+        runs[name] = newton(fun, [0.5], hess=hess, step_limit=step_limit, barriers=b, ftol=1e-10,
+                            callback=lambda i, x, e, f: seen.append(x[0]))  # fmt: skip
+        assert runs[name].converged
+    assert min(seen) > 0
+    assert runs["springs"].x[0] == pytest.approx(runs["plain"].x[0], rel=1e-9)
+    assert runs["springs"].iterations < runs["plain"].iterations - 2
+
+
+def test_barriers_leave_a_problem_without_contacts_unchanged():
+    fun, hess, step_limit, barriers = _wall_problem(target=2.0)
+    a = newton(fun, [0.5], hess=hess, step_limit=step_limit, ftol=1e-12)
+    b = newton(fun, [0.5], hess=hess, step_limit=step_limit, barriers=barriers, ftol=1e-12)
+    assert a.x.tolist() == b.x.tolist() and a.iterations == b.iterations

@@ -89,8 +89,12 @@ def assert_stage_bookkeeping(result: RampResult):
         assert stage.energy == terms
         assert stage.energy.total == pytest.approx(stage.result.energy, rel=1e-12)
         assert isinstance(stage.result, MinimizeResult)
-        if stage.result.converged:
-            assert stage.result.max_force <= stage.result.ftol
+        if stage.result.converged:  # the documented criterion: ftol, or the force resolution
+            # when ftol is below it (a deep contact's stiffness times one ulp), and then said so
+            r = stage.result
+            assert r.max_force <= r.ftol or (
+                r.max_force <= r.force_resolution and "force resolution" in r.message
+            )
         else:
             assert stage.result.message
         np.testing.assert_array_equal(stage.result.x, stage.positions)

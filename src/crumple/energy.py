@@ -41,6 +41,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .energy_kernels import (
+    _barrier_rows,
+    _csc_pattern_kernel,
     _elastic_eg,
     _hard_core_eg,
     _hessian_triplets,
@@ -48,6 +50,7 @@ from .energy_kernels import (
     _line_energy,
     _line_prepare,
     _max_displacement,
+    _pattern_where,
     _total_eg,
     _wall_eg,
 )
@@ -435,25 +438,56 @@ class WireEnergy:
         if dense:
             h = np.bincount(rows * ndof + cols, weights=vals, minlength=ndof * ndof)
             return h.reshape(ndof, ndof)
-        if self._pattern is None or not (
-            self._pattern[0] is ks
-            or (np.array_equal(self._pattern[0], ks) and np.array_equal(self._pattern[1], js))
-        ):  # a rebuilt neighbour list often holds the same pairs: keep the pattern then
-            self._pattern = (ks, js, *_csc_pattern(rows, cols, ndof))
+        if self._pattern is None or self._pattern[0] is not ks:
+            self._pattern = self._new_pattern(ks, js, rows, cols, ndof)
         _, _, indptr, indices, where = self._pattern
         data = np.bincount(where, weights=vals, minlength=indices.shape[0])
         return sp.csc_matrix((data, indices, indptr), shape=(ndof, ndof), copy=False)
 
+    def _new_pattern(self, ks, js, rows, cols, ndof):
+        """The pattern for a rebuilt neighbour list. A rebuilt list often holds the same pairs,
+        or fewer: the current pattern (the same index arrays, so that the factorisation keeps
+        its symbolic analysis) is kept whenever it holds every entry of the new one, the
+        entries of pairs that left it staying explicit zeros."""
+        if self._pattern is not None:
+            indptr, indices = self._pattern[2], self._pattern[3]
+            where = _pattern_where(rows, cols, indptr, indices)
+            if where.shape[0] == 0 or where[0] >= 0:
+                return (ks, js, indptr, indices, where)
+        return (ks, js, *_csc_pattern(rows, cols, ndof))
+
+    def barriers(self, x, step):
+        """The hard-core barriers that ``step`` may enter from ``x``, for the Newton model.
+
+        Returns ``(index, value, offset, stiffness)`` as :func:`crumple.minimize.newton`'s
+        ``barriers`` wants them: one row per candidate pair now outside the core (D >= d)
+        that the step, linearised, brings to within d + ``BARRIER_MARGIN`` (D - d): a = ∇D,
+        r = d - D, and the barrier's curvature at its edge, k = ε b''(1)/d² = 2ε/d². The model
+        then sees a contact before the step reaches it; the energy itself is unchanged.
+        """
+        w = self.wire
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        ks, js = self._pairs(x)
+        index, value, offset = _barrier_rows(
+            x, np.ascontiguousarray(step, dtype=np.float64).reshape(x.shape), ks, js, w.hard_core,
+            BARRIER_MARGIN,
+        )  # fmt: skip
+        stiffness = np.full(offset.shape[0], 2.0 * w.hard_core_energy / w.hard_core**2)
+        return index, value, offset, stiffness
+
+
+#: The pairs :meth:`WireEnergy.barriers` lists: those the step brings, linearised, to within
+#: d + BARRIER_MARGIN (D - d) (so at least halfway from where they are to the core). Measured:
+#: the same iterations as listing every pair the step could reach at all, 10 % less CPU at
+#: N = 1000 (fewer springs tried and dropped).
+BARRIER_MARGIN = 0.5
+
 
 def _csc_pattern(rows, cols, ndof):
     """CSC pattern (indptr, indices) of the triplets, and the entry each triplet adds to."""
-    key = cols * ndof + rows
-    uniq, where = np.unique(key, return_inverse=True)
-    index = np.int32 if uniq.shape[0] < 2**31 - 1 else np.int64
-    indices = (uniq % ndof).astype(index)
-    indptr = np.zeros(ndof + 1, dtype=index)
-    np.cumsum(np.bincount(uniq // ndof, minlength=ndof), out=indptr[1:])
-    return indptr, indices, where
+    indptr, indices, where = _csc_pattern_kernel(rows, cols, ndof)
+    index = np.int32 if indices.shape[0] < 2**31 - 1 else np.int64
+    return indptr.astype(index), indices.astype(index), where
 
 
 def energy_terms(wire: Wire, positions, lam: float, *, rest_angles=None) -> EnergyTerms:

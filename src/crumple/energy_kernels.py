@@ -420,3 +420,117 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
             _project_psd(block6)
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     return rows[:m], cols[:m], vals[:m]
+
+
+@njit(cache=True)
+def _csc_pattern_kernel(rows, cols, ndof):
+    """CSC pattern of the triplets (rows sorted in each column, duplicates merged) and the entry
+    each triplet adds to: a counting sort by column, then a sort of each column's rows.
+    Replaces ``np.unique`` on the keys, several times faster at a pattern change."""
+    t = rows.shape[0]
+    start = np.zeros(ndof + 1, dtype=np.int64)
+    for e in range(t):
+        start[cols[e] + 1] += 1
+    for c in range(ndof):
+        start[c + 1] += start[c]
+    order = np.empty(t, dtype=np.int64)
+    fill = start[:-1].copy()
+    for e in range(t):
+        order[fill[cols[e]]] = e
+        fill[cols[e]] += 1
+    indptr = np.zeros(ndof + 1, dtype=np.int64)
+    indices = np.empty(t, dtype=np.int64)
+    where = np.empty(t, dtype=np.int64)
+    nnz = 0
+    for c in range(ndof):
+        lo, hi = start[c], start[c + 1]
+        if hi - lo > 48:  # a crowded column (many contacts): O(k log k)
+            seg = order[lo:hi].copy()
+            order[lo:hi] = seg[np.argsort(rows[seg])]
+        else:  # insertion sort, fastest for the few entries of a chain's column
+            for e in range(lo + 1, hi):
+                v = order[e]
+                f = e - 1
+                while f >= lo and rows[order[f]] > rows[v]:
+                    order[f + 1] = order[f]
+                    f -= 1
+                order[f + 1] = v
+        for e in range(lo, hi):
+            v = order[e]
+            if e == lo or rows[v] != rows[order[e - 1]]:
+                indices[nnz] = rows[v]
+                nnz += 1
+            where[v] = nnz - 1
+        indptr[c + 1] = nnz
+    return indptr, indices[:nnz], where
+
+
+@njit(cache=True)
+def _pattern_where(rows, cols, indptr, indices):
+    """The entry of an existing CSC pattern (rows sorted in each column) each triplet adds to,
+    by binary search; ``where[0] = -1`` when some triplet has no entry in it."""
+    t = rows.shape[0]
+    where = np.empty(t, dtype=np.int64)
+    for e in range(t):
+        lo, hi = indptr[cols[e]], indptr[cols[e] + 1]
+        r = rows[e]
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if indices[mid] < r:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo == indptr[cols[e] + 1] or indices[lo] != r:
+            where[0] = -1
+            return where
+        where[e] = lo
+    return where
+
+
+# --------------------------------------------------------------------------------------------
+# Kernel: the barriers a step may enter, as one-sided springs of the Newton model
+# --------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _barrier_rows(pos, step, ks, js, width, margin=-1.0):
+    """Candidate pairs outside the core (D >= d) that ``step`` could bring inside it.
+
+    A pair's distance falls by at most |step_k| + max(|step_j|, |step_j+1|); those that can
+    reach d, and (with ``margin`` >= 0) whose linearised distance after the step is below
+    d + margin (D - d), get a row a = ∇D (over the flattened coordinates 2 * node + axis: node
+    k, segment ends j and j + 1) and an offset r = d - D <= 0, so that the linearised distance
+    after a step s, D + aᵀs, is below d exactly when aᵀs < r.
+    """
+    m = ks.shape[0]
+    index = np.empty((m, 6), dtype=np.int64)
+    value = np.empty((m, 6))
+    offset = np.empty(m)
+    c = 0
+    for q in range(m):
+        k, j = ks[q], js[q]
+        dist, t, vx, vy = _point_segment(
+            pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
+        )
+        if dist < width:
+            continue
+        sk = math.sqrt(step[k, 0] ** 2 + step[k, 1] ** 2)
+        sa = math.sqrt(step[j, 0] ** 2 + step[j, 1] ** 2)
+        sb = math.sqrt(step[j + 1, 0] ** 2 + step[j + 1, 1] ** 2)
+        if dist - sk - max(sa, sb) >= width:
+            continue
+        nx, ny = vx / dist, vy / dist
+        if margin >= 0.0:  # keep only pairs the step itself drives most of the way in
+            lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
+            lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
+            if lin >= width + margin * (dist - width):
+                continue
+        index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
+        index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
+        index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
+        value[c, 0], value[c, 1] = nx, ny
+        value[c, 2], value[c, 3] = -(1.0 - t) * nx, -(1.0 - t) * ny
+        value[c, 4], value[c, 5] = -t * nx, -t * ny
+        offset[c] = width - dist
+        c += 1
+    return index[:c], value[:c], offset[:c]

@@ -311,6 +311,7 @@ def minimize_wire(
     rest_angles=None,
     fixed=None,
     rtol: float | None = None,
+    anticipate_contacts: bool = True,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -347,6 +348,14 @@ def minimize_wire(
     rtol : float, optional
         Powell: NR's stopping rule (a sweep lowering the energy by less than this fraction
         ends the stage); default :data:`POWELL_RTOL`.
+    anticipate_contacts : bool
+        Newton: let the model see the hard core of the pairs a step is about to enter (its
+        curvature at the edge, as a one-sided spring: :meth:`WireEnergy.barriers`), so that a
+        step stops at a contact instead of being cut by collision detection. The energy and
+        the equilibrium and stability criteria are the same; only the path changes, and with
+        it, after a snap-through, which local minimum a stage reaches (docs/performance.md,
+        "Branches"). False: the engine before issue 9's item 3, kept for comparison
+        (``benchmarks/bench_scale.py contacts``).
 
     Examples
     --------
@@ -397,6 +406,7 @@ def minimize_wire(
             metric=node_lengths(wire),
             zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
             fixed=fixed,
+            barriers=energy.barriers if anticipate_contacts else None,
         )
     if method == "powell":
         if rng is None:
