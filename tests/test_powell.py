@@ -208,3 +208,13 @@ def test_powell_study_smoke_report(tmp_path):
     (out / "report.md").unlink()
     assert main(["figures", str(out), "--quiet"]) == 0  # `crumple figures` knows the study
     assert (out / "report.md").read_text() == md
+
+
+@pytest.mark.parametrize("module", ["crumple.powell", "crumple.minimize", "crumple.minimize_result"])
+def test_each_solver_module_imports_on_its_own(module):
+    # a fresh interpreter: an import cycle between minimize and powell showed only there
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-c", f"import {module}"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr

@@ -32,6 +32,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .linalg import LDLT
+from .minimize_result import MinimizeResult, _row_norms, _validate_common, max_force
+from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
 
@@ -40,78 +42,6 @@ RADIUS_SHRINK = 4.0
 RESOLUTION_FACTOR = 10.0
 RADIUS_GROW = 4.0
 SKIP_MAX = 8
-
-
-@dataclass(frozen=True, slots=True, kw_only=True)
-class MinimizeResult:
-    """Outcome of a minimisation.
-
-    Attributes
-    ----------
-    x : ndarray
-        Final point, shape of the start.
-    energy : float
-        Energy at ``x``.
-    max_force : float
-        max_i |grad[i]| at ``x``.
-    iterations, evaluations, hessian_evaluations : int
-        Outer iterations; energy-and-gradient (or energy-only, for Powell) calls; Hessians.
-    factorizations : int
-        Sparse LDLᵀ factorisations (Newton: one per iteration, plus the stability tests).
-    force_resolution : float
-        Newton: the force change a one-ulp move of the coordinates can make (times 10): the
-        floor below which forces are round-off. ``converged`` means
-        ``max_force <= max(ftol, force_resolution)``; the message says which held.
-    converged : bool
-        ``max_force <= ftol``.
-    ftol : float
-        The tolerance used.
-    message : str
-        Why it stopped.
-    method : str
-    """
-
-    x: np.ndarray
-    energy: float
-    max_force: float
-    iterations: int
-    evaluations: int
-    hessian_evaluations: int
-    converged: bool
-    ftol: float
-    message: str
-    method: str
-    factorizations: int = 0
-    force_resolution: float = 0.0
-
-
-def max_force(grad) -> float:
-    """Largest row norm of a gradient (largest node force); absolute value for 1-D arrays.
-
-    >>> max_force(np.array([[3.0, 4.0], [0.0, 1.0]]))
-    5.0
-    """
-    g = np.asarray(grad)
-    if g.ndim == 1:
-        return float(np.max(np.abs(g))) if g.size else 0.0
-    return float(np.sqrt(np.max(np.einsum("ij,ij->i", g, g)))) if g.size else 0.0
-
-
-def _row_norms(p):
-    return np.abs(p) if p.ndim == 1 else np.sqrt(np.einsum("ij,ij->i", p, p))
-
-
-def _validate_common(x0, ftol, maxiter):
-    x = np.array(x0, dtype=np.float64)
-    if x.ndim not in (1, 2) or x.size == 0:
-        raise ValueError(f"x0 must be a non-empty 1-D or 2-D array, got shape {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("x0 contains NaN or infinite values")
-    if not (math.isfinite(ftol) and ftol > 0):
-        raise ValueError(f"ftol must be positive, got {ftol}")
-    if int(maxiter) < 1:
-        raise ValueError(f"maxiter must be >= 1, got {maxiter}")
-    return x
 
 
 def newton(
@@ -521,10 +451,6 @@ def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_s
     return None
 
 
-def _row_norms(p):
-    return np.abs(p) if p.ndim == 1 else np.sqrt(np.einsum("ij,ij->i", p, p))
-
-
 def _modes(zero_modes, x, m):
     """The zero modes as the columns of an (x.size, k) array, or None."""
     if zero_modes is None:
@@ -628,6 +554,3 @@ def resolution(energy: float) -> float:
     """
     return max(16.0 * _EPS * abs(energy), 1e-300)
 
-
-# Powell's method lives in its own module; imported last (it uses MinimizeResult from here)
-from .powell import powell, random_directions  # noqa: E402

@@ -33,7 +33,7 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
-from .minimize import MinimizeResult, _row_norms, _validate_common, max_force
+from .minimize_result import MinimizeResult, _row_norms, _validate_common, max_force
 
 __all__ = ["STATUS", "powell", "random_directions"]
 

@@ -1,0 +1,86 @@
+"""What every minimiser returns, and the checks and force measure they share.
+
+Split from :mod:`crumple.minimize` so that :mod:`crumple.powell` and :mod:`crumple.minimize`
+both import it without importing each other.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["MinimizeResult", "max_force"]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MinimizeResult:
+    """Outcome of a minimisation.
+
+    Attributes
+    ----------
+    x : ndarray
+        Final point, shape of the start.
+    energy : float
+        Energy at ``x``.
+    max_force : float
+        max_i |grad[i]| at ``x``.
+    iterations, evaluations, hessian_evaluations : int
+        Outer iterations; energy-and-gradient (or energy-only, for Powell) calls; Hessians.
+    factorizations : int
+        Sparse LDLᵀ factorisations (Newton: one per iteration, plus the stability tests).
+    force_resolution : float
+        Newton: the force change a one-ulp move of the coordinates can make (times 10): the
+        floor below which forces are round-off. ``converged`` means
+        ``max_force <= max(ftol, force_resolution)``; the message says which held.
+    converged : bool
+        ``max_force <= ftol``.
+    ftol : float
+        The tolerance used.
+    message : str
+        Why it stopped.
+    method : str
+    """
+
+    x: np.ndarray
+    energy: float
+    max_force: float
+    iterations: int
+    evaluations: int
+    hessian_evaluations: int
+    converged: bool
+    ftol: float
+    message: str
+    method: str
+    factorizations: int = 0
+    force_resolution: float = 0.0
+
+
+def max_force(grad) -> float:
+    """Largest row norm of a gradient (largest node force); absolute value for 1-D arrays.
+
+    >>> max_force(np.array([[3.0, 4.0], [0.0, 1.0]]))
+    5.0
+    """
+    g = np.asarray(grad)
+    if g.ndim == 1:
+        return float(np.max(np.abs(g))) if g.size else 0.0
+    return float(np.sqrt(np.max(np.einsum("ij,ij->i", g, g)))) if g.size else 0.0
+
+
+def _row_norms(p):
+    return np.abs(p) if p.ndim == 1 else np.sqrt(np.einsum("ij,ij->i", p, p))
+
+
+def _validate_common(x0, ftol, maxiter):
+    x = np.array(x0, dtype=np.float64)
+    if x.ndim not in (1, 2) or x.size == 0:
+        raise ValueError(f"x0 must be a non-empty 1-D or 2-D array, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("x0 contains NaN or infinite values")
+    if not (math.isfinite(ftol) and ftol > 0):
+        raise ValueError(f"ftol must be positive, got {ftol}")
+    if int(maxiter) < 1:
+        raise ValueError(f"maxiter must be >= 1, got {maxiter}")
+    return x
