@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import crumple.protocol as protocol
+import crumple.relax as relax
 from crumple.energy import WireEnergy, cavity_energy, confinement_energy, energy_terms
 from crumple.geometry import disc_exit_fraction, has_crossings
 from crumple.minimize import resolution
@@ -257,14 +258,14 @@ def test_no_accepted_configuration_leaves_the_cavity_or_crosses(n, rc, lam, seed
     if has_crossings(x0) or np.max(np.hypot(*x0.T)) >= rc:
         return
     seen = []
-    newton = protocol.newton
+    newton = relax.newton
 
     def recording(*args, **kwargs):
         kwargs["callback"] = lambda it, x, e, f: seen.append((x.copy(), e))
         return newton(*args, **kwargs)
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(protocol, "newton", recording)
+        mp.setattr(relax, "newton", recording)
         res = minimize_wire(wire, x0, lam, maxiter=300)
     assert seen
     energy = WireEnergy(wire, lam)

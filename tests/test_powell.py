@@ -16,14 +16,8 @@ from crumple.energy import WireEnergy
 from crumple.geometry import has_crossings, max_safe_fraction
 from crumple.minimize import powell
 from crumple.model import Plasticity, Wire
-from crumple.protocol import (
-    POWELL_REACH,
-    POWELL_RTOL,
-    Ramp,
-    _step_limit,
-    minimize_wire,
-    run_ramp,
-)
+from crumple.protocol import Ramp, run_ramp
+from crumple.relax import POWELL_REACH, POWELL_RTOL, _step_limit, minimize_wire
 
 
 def _crumpled(n=24, seed=3, lam=2000.0):
@@ -210,7 +204,9 @@ def test_powell_study_smoke_report(tmp_path):
     assert (out / "report.md").read_text() == md
 
 
-@pytest.mark.parametrize("module", ["crumple.powell", "crumple.minimize", "crumple.minimize_result"])
+@pytest.mark.parametrize(
+    "module", ["crumple.powell", "crumple.minimize", "crumple.minimize_result"]
+)
 def test_each_solver_module_imports_on_its_own(module):
     # a fresh interpreter: an import cycle between minimize and powell showed only there
     import subprocess

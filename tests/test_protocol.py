@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import crumple.protocol as protocol
+import crumple.relax as relax
 from crumple.energy import WireEnergy
 from crumple.geometry import find_crossings, has_crossings, max_safe_fraction
 from crumple.minimize import MinimizeResult, resolution
@@ -41,12 +42,12 @@ from crumple.protocol import (
 
 
 class StepAudit:
-    """Replaces ``crumple.protocol.newton`` by the real solver plus a callback that checks, at
+    """Replaces ``crumple.relax.newton`` by the real solver plus a callback that checks, at
     every accepted step, that the energy did not rise beyond its resolution and that the wire
     does not cross itself (exact test)."""
 
     def __init__(self):
-        self.real = protocol.newton
+        self.real = relax.newton
         self.steps = 0
         self.calls = 0
         self.violations: list[str] = []
@@ -73,7 +74,7 @@ class StepAudit:
 def audited_ramp(wire, ramp, seed):
     audit = StepAudit()
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(protocol, "newton", audit)
+        mp.setattr(relax, "newton", audit)
         result = run_ramp(wire, ramp, seed=seed)
     return result, audit
 

@@ -23,15 +23,21 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
-from typing import Literal
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .energy import EnergyTerms, WireEnergy, confinement_weights
-from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
-from .minimize import MinimizeResult, newton, powell
+from .energy import EnergyTerms, WireEnergy
+from .minimize import MinimizeResult
 from .model import Wire
+from .relax import (
+    POWELL_RTOL,
+    STABILITY_TOL,
+    Method,
+    _step_limit,
+    minimize_wire,
+    node_lengths,
+)
 
 __all__ = [
     "DEFAULT_MAXITER",
@@ -51,16 +57,6 @@ __all__ = [
 
 #: The trap strengths shown in the paper's Fig. 2.
 PAPER_LAMBDAS = (70.0, 200.0, 300.0, 1000.0)
-
-#: Stability tolerance τ ``[energy/length³]``: an equilibrium is accepted as a minimum when no
-#: eigenvalue of the Hessian per unit length (the pencil (H, M), M the length of wire each node
-#: stands for, :func:`node_lengths`) lies below -τ. Per unit length, the eigenvalues are those
-#: of the continuum wire: the confinement alone contributes 2λ (λ >= 1 in the paper), the
-#: straight wire just above its Euler load has -4 to -27 (N = 10⁴, λ = 7 to 12.6). τ is far
-#: below both and far above round-off (docs/model.md, "Minimisation to equilibrium").
-STABILITY_TOL = 1e-3
-
-Method = Literal["newton", "powell"]
 
 
 def default_schedule(
@@ -86,15 +82,6 @@ def default_schedule(
     values.update(float(v) for v in include if lam_min <= v <= lam_max)
     return tuple(sorted(values))
 
-
-#: Powell: the longest move of a node in one line search, in segment lengths (the interval its
-#: continuous collision detection and its neighbour list cover).
-POWELL_REACH = 0.25
-#: Powell: the first trial step of each line search, in segment lengths (then twice the last).
-POWELL_STEP = 1e-3
-#: Powell: NR's stopping rule by default, a sweep lowering the energy by less than this fraction
-#: ends the stage (Numerical Recipes' example uses 1e-6; ours lets ``maxiter`` decide).
-POWELL_RTOL = 1e-12
 
 #: ``Ramp.maxiter``'s default per method: Newton iterations, Powell sweeps per stage.
 DEFAULT_MAXITER = {"newton": 5000, "powell": 20}
@@ -296,178 +283,6 @@ def initial_state(wire: Wire, noise: float = 0.01, *, seed=None) -> np.ndarray:
     x[:, 1] = noise * wire.rest_length * rng.standard_normal(n)
     x += np.asarray(wire.trap_center)
     return x
-
-
-def minimize_wire(
-    wire: Wire,
-    positions,
-    lam: float,
-    *,
-    method: Method = "newton",
-    ftol: float = 1e-6,
-    maxiter: int = 5000,
-    max_step: float = 0.5,
-    rng: np.random.Generator | None = None,
-    rest_angles=None,
-    fixed=None,
-    rtol: float | None = None,
-    anticipate_contacts: bool = True,
-) -> MinimizeResult:
-    """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
-
-    Newton: every step is limited by continuous collision detection
-    (:func:`crumple.geometry.max_safe_fraction`) and every accepted configuration is checked
-    by the exact crossing test, so the wire cannot pass through itself. Powell: each line
-    search only looks along the part of its line that the same collision detection allows
-    (no node moves further than :data:`POWELL_REACH` segments), and the point it ends at is
-    taken only if it passes the crossing test; compiled (Numba) without a cavity. With a
-    cavity (``wire.cavity_radius``) the steps are also limited so that no node reaches the wall
-    (:func:`crumple.geometry.disc_exit_fraction`), and a configuration with a node on or
-    outside it is never accepted.
-
-    Parameters
-    ----------
-    wire : Wire
-    positions : array_like, shape (wire.n_nodes, 2)
-        Start ``[length]``, must not cross itself.
-    lam : float
-        Trap strength λ.
-    method : {"newton", "powell"}
-    ftol : float
-        Equilibrium tolerance on the largest node force ``[energy/length]``.
-    maxiter : int
-    max_step : float
-        Newton: largest node displacement per step ``[length]`` (the largest trust radius).
-    rng : numpy.random.Generator
-        Powell's random directions (required for Powell).
-    rest_angles : array_like, shape (wire.n_nodes - 2,), optional
-        Rest turning angles of an imperfect wire (see ``Wire.rest_angle_sd``).
-    fixed : array_like of bool, shape (wire.n_nodes,), optional
-        Nodes held at their starting positions (Newton only): a clamped end is its two end
-        nodes. With any node fixed, no rigid motion is a zero mode.
-    rtol : float, optional
-        Powell: NR's stopping rule (a sweep lowering the energy by less than this fraction
-        ends the stage); default :data:`POWELL_RTOL`.
-    anticipate_contacts : bool
-        Newton: let the model see the hard core of the pairs a step is about to enter (its
-        curvature at the edge, as a one-sided spring: :meth:`WireEnergy.barriers`), so that a
-        step stops at a contact instead of being cut by collision detection. The energy and
-        the equilibrium and stability criteria are the same; only the path changes, and with
-        it, after a snap-through, which local minimum a stage reaches (docs/performance.md,
-        "Branches"). False: the engine before issue 9's item 3, kept for comparison
-        (``benchmarks/bench_scale.py contacts``).
-
-    Examples
-    --------
-    >>> w = Wire(k_b=5, k_s=5e5, n_segments=20)
-    >>> r = minimize_wire(w, initial_state(w, seed=0), lam=1.0)
-    >>> r.converged
-    True
-    """
-    energy = WireEnergy(wire, lam, rest_angles=rest_angles)
-    x0 = np.array(positions, dtype=np.float64)
-    if x0.shape != (wire.n_nodes, 2):
-        raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
-    if has_crossings(x0):
-        raise ValueError("the starting configuration crosses itself")
-    radius = wire.cavity_radius
-    if radius is not None and not _inside(x0, radius):
-        worst = float(np.max(np.hypot(*x0.T)))
-        raise ValueError(
-            f"the starting configuration leaves the cavity: a node at |x| = {worst:.6g} >= "
-            f"cavity_radius {radius:.6g}"
-        )
-    free_rotation = True
-    if fixed is not None:
-        fixed = np.asarray(fixed)
-        if fixed.dtype != np.bool_ or fixed.shape != (wire.n_nodes,):
-            raise ValueError(f"fixed must be a boolean array of shape ({wire.n_nodes},)")
-        if method != "newton":
-            raise ValueError("fixed nodes need method='newton'")
-        free_rotation = not fixed.any()
-
-    def feasible(x):
-        return (radius is None or _inside(x, radius)) and not has_crossings(x)
-
-    if method == "newton":
-        return newton(
-            energy,
-            x0,
-            hess=lambda x: energy.hessian(x, dense=False),
-            # contacts projected on their positive part; bending and stretching exact (measured:
-            # projecting the joints too doubled the iterations of the default ramp)
-            hess_fallback=lambda x: energy.hessian(x, dense=False, project_contacts=True),
-            ftol=ftol,
-            maxiter=maxiter,
-            max_step=max_step,
-            step_limit=_step_limit(radius),
-            feasible=feasible,
-            curvature_tol=STABILITY_TOL,
-            metric=node_lengths(wire),
-            zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
-            fixed=fixed,
-            barriers=energy.barriers if anticipate_contacts else None,
-        )
-    if method == "powell":
-        if rng is None:
-            raise ValueError("Powell needs a random generator for its directions (rng=...)")
-        reach = POWELL_REACH * wire.rest_length
-        return powell(
-            lambda x: energy(x)[0],
-            x0,
-            rng=rng,
-            gradient=lambda x: energy(x)[1],
-            feasible=feasible,
-            step_limit=_step_limit(radius),
-            compiled=energy.line_kernels(reach) if radius is None else None,
-            ftol=ftol,
-            rtol=POWELL_RTOL if rtol is None else rtol,
-            maxiter=maxiter,
-            step=POWELL_STEP * wire.rest_length,
-            reach=reach,
-        )
-    raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
-
-
-def node_lengths(wire: Wire) -> np.ndarray:
-    """The length of wire each node stands for, shape (n_nodes,) ``[length]``: L0/N inside,
-    L0/(2N) at the two ends. The metric of the stability test: with it the eigenvalues of the
-    Hessian are those of the continuum wire, independent of N."""
-    return confinement_weights(wire.n_nodes, "per-length", wire.length)
-
-
-def _inside(x, radius) -> bool:
-    """Every node strictly inside the cavity (the exact test of an accepted configuration)."""
-    return bool(np.all(np.einsum("ij,ij->i", x, x) < radius * radius))
-
-
-def _step_limit(radius):
-    """The safe fraction of a step: no node-segment contact, and no node reaching the wall.
-
-    Testing the nodes against the wall is enough: the disc is convex, so a segment whose ends
-    are inside lies inside."""
-    if radius is None:
-        return max_safe_fraction
-
-    def limit(x, p):
-        return min(max_safe_fraction(x, p), disc_exit_fraction(x, p, radius))
-
-    return limit
-
-
-def _symmetry_modes(x, wire, lam):
-    """Rigid motions that leave the energy unchanged: the rotation about the trap's centre
-    (the trap is isotropic), and the two translations when there is no trap. A cavity
-    (centred at the origin) allows no translation, and the rotation only about the origin."""
-    center = np.asarray(wire.trap_center)
-    cavity = wire.cavity_radius is not None
-    if cavity and lam != 0 and np.any(center != 0):
-        return np.zeros((0, x.size))
-    r = x - (0.0 if cavity else center)
-    modes = [np.column_stack([-r[:, 1], r[:, 0]]).ravel()]
-    if lam == 0 and not cavity:
-        modes += [np.tile([1.0, 0.0], len(x)), np.tile([0.0, 1.0], len(x))]
-    return np.array(modes)
 
 
 ProgressCallback = Callable[[int, int, Stage], None]
