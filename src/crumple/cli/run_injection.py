@@ -35,7 +35,7 @@ _FLAGS = [
     ("--jam-force", "jam_force", float, "injection: stop when the feed force exceeds this "
      "[energy/length] (default: never)"),
     ("--max-push", "max_push", float, "injection: largest channel move per minimisation "
-     "[length] (default a quarter segment)"),
+     "[length] (default an eighth of a segment)"),
     ("--noise", "noise", float, "injection: transverse kick of a released node [segment "
      "lengths] (default 0.01)"),
     ("--figure-lengths", None, str, "injection: injected lengths to draw (default: four, "
