@@ -222,8 +222,9 @@ def test_injection_never_leaves_the_cavity_nor_crosses(n, radius, push_segments,
 
 
 def _force_mismatch(div: int) -> tuple[int, float]:
-    """(stages compared, median |ΔE/δ / F̄ - 1|, F the clamp's reaction) of an injection pushed a segment / ``div``
-    per stage, over the pairs of stages with no release and F smooth on the scale δ."""
+    """(stages compared, median |ΔE/δ / F̄ - 1|, F the clamp's reaction) of an injection
+    pushed a segment / ``div`` per stage, over the pairs of stages with no release and F
+    smooth on the scale δ."""
     wire = small_wire(20)
     push = wire.rest_length / div
     res = run_injection(wire, Injection(push=push, stop_length=0.4, max_push=push), seed=0)

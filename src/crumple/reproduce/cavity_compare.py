@@ -194,6 +194,10 @@ def _compare_row(key: str, quantity: str, cav: Estimate, ramp: Estimate, note: s
         verdict = "undefined in the cavity (hollow packing: M = 0 at R = r_max/2)"
     elif not ok:
         verdict = "not measured"
+    elif sigma == 0 and min(cav.n, ramp.n) < 2:
+        verdict = "σ unknown (1 replica): no verdict"
+    elif sigma == 0:
+        verdict = "σ = 0 (identical replicas): no verdict"
     elif abs(diff) <= 2 * sigma:
         verdict = "same within 2σ"
     else:
@@ -238,13 +242,14 @@ def measure(ctx: Context) -> Record:
                                      cav[k], rmp[k], note, f"{n} per protocol"))  # fmt: skip
         beta = _fit_window(inj.lam[None, :].repeat(inj.replicas, 0), inj.obs["feed_force"][p],
                            (0.5 * np.nanmax(inj.lam), np.nanmax(inj.lam)))  # fmt: skip
-        nu = _loop_growth(inj, p)
+        nu, nu_note = _loop_growth(inj, p)
         alpha = _alpha(ramp, p)
         alts += [
-            _alt(f"F ~ L_in^β (feed force, upper half of L_in), {label}", "cavity", beta,
-                 inj.replicas),
+            _alt(f"F ~ L_in^β (injection force = work per length; upper half of L_in: a "
+                 f"factor 2 only), {label}", "cavity", beta, inj.replicas),
             _alt(f"r_max ~ λ^α (λ ≥ 100), {label}", "potential", alpha, ramp.replicas, -0.25),
-            _alt(f"n_loops ~ L_in^ν (stages with loops), {label}", "cavity", nu, inj.replicas),
+            _alt(f"n_loops ~ L_in^ν (stages with loops; {nu_note}), {label}", "cavity", nu,
+                 inj.replicas),
             _alt(f"D_M about the cavity's centre at the final φ, {label}", "cavity",
                  _est([inj.obs["D_M_center"][p, r, j] for r, (j, _) in
                        zip(range(inj.replicas), m["stages"], strict=False)]), n, 1.9),
@@ -253,6 +258,7 @@ def measure(ctx: Context) -> Record:
                         "cavity": {k: v.to_dict() for k, v in cav.items()},
                         "ramp": {k: v.to_dict() for k, v in rmp.items()},
                         "feed_force_exponent": beta.to_dict(), "loop_exponent": nu.to_dict(),
+                        "loop_exponent_note": nu_note,
                         "alpha_ramp": alpha.to_dict(), "pressure_window": list(win),
                         "stop_reasons": [str(v) for v in inj.obs["stop_reason"][p]]}  # fmt: skip
         detail["wires"][label] = _detail(inj, ramp, p, m, win, kc, kr)
@@ -266,10 +272,27 @@ def _alpha(ramp: Series, p: int) -> Estimate:
     return _fit_replicas(ramp.lam[ok], ramp.obs["r_max"][p][:, ok])
 
 
-def _loop_growth(inj: Series, p: int) -> Estimate:
-    """ν in n_loops ~ L_in^ν over the stages with at least one loop."""
-    y = inj.obs["n_loops"][p]
-    return _fit_replicas(inj.lam, np.where(y >= 1, y, np.nan))
+#: ν is fitted only over a factor this large in n_loops (or a decade in L_in): a staircase of
+#: one or two loops is not a power law.
+LOOP_RANGE = 4.0
+
+
+def _loop_growth(inj: Series, p: int) -> tuple[Estimate, str]:
+    """ν in n_loops ~ L_in^ν over the stages with at least one loop, and a note; NaN with
+    "too few loops" where no replica spans :data:`LOOP_RANGE` in n_loops nor a decade in
+    L_in."""
+    y = np.where(inj.obs["n_loops"][p] >= 1, inj.obs["n_loops"][p], np.nan)
+    spans = []
+    for yr in y:
+        ok = np.isfinite(yr)
+        if ok.sum() >= 3:
+            spans.append((np.nanmax(yr) / np.nanmin(yr), inj.lam[ok].max() / inj.lam[ok].min()))
+    if not any(n >= LOOP_RANGE or lr >= 10.0 for n, lr in spans):
+        top = max((n for n, _ in spans), default=math.nan)
+        return Estimate(math.nan, math.nan, 0), (
+            f"too few loops: n_loops spans a factor {top:.3g} at most (needs {LOOP_RANGE:g} or a "
+            f"decade in L_in)")
+    return _fit_replicas(inj.lam, y), "fitted"
 
 
 def _detail(inj, ramp, p, m, win, kc, kr) -> dict:
@@ -335,7 +358,8 @@ def _claims(extra: dict) -> tuple:
             "measured": f"ν = {_fmt(nu)} in n_loops ~ L_in^ν, {label}",
             "criterion": "a power law over the stages with loops (we state our exponent; the "
                          "number is not compared with theirs, which we do not quote)",
-            "verdict": "measured" if nu["value"] is not None else "not measured (no loops)",
+            "verdict": "measured" if nu["value"] is not None else
+                       f"not measured ({ex.get('loop_exponent_note', 'no loops')})",
         })  # fmt: skip
     return tuple(out)
 
@@ -344,7 +368,8 @@ def _same(ex, k) -> bool:
     c, r = ex["cavity"][k], ex["ramp"][k]
     if c["value"] is None or r["value"] is None:
         return False
-    return abs(c["value"] - r["value"]) <= 2 * math.hypot(c["sigma"] or 0.0, r["sigma"] or 0.0)
+    sigma = math.hypot(c["sigma"] or 0.0, r["sigma"] or 0.0)
+    return sigma > 0 and abs(c["value"] - r["value"]) <= 2 * sigma
 
 
 def _published_dm(label: str, dm: dict) -> dict:
