@@ -340,6 +340,11 @@ def test_cli_runs_an_injection_and_rejects_unknown_protocol_keys(tmp_path, capsy
     cfg.write_text('[protocol]\nkind = "ramp"\npush = 0.5\n')
     assert main(["run", "--config", str(cfg), "--out", str(tmp_path / "q")]) == 2
     assert "push" in capsys.readouterr().err
+    # the ramp rejects injection flags, as the injection rejects the ramp's (referee S6)
+    assert main(["run", "--push", "0.1", "--cavity-radius", "0.3", "--n-segments", "6",
+                 "--lambdas", "1,2", "--out", str(tmp_path / "r")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "--cavity-radius" in err and "--push" in err and not (tmp_path / "r").exists()
 
 
 def test_sweep_protocol_table():

@@ -19,7 +19,7 @@ import numpy as np
 
 from .inputs import CLIError, floats, positive_int
 
-__all__ = ["add_injection_flags", "cmd_injection"]
+__all__ = ["add_injection_flags", "cmd_injection", "reject_injection_flags"]
 
 #: Injection flags: (flag, Injection key or None, type, help).
 _FLAGS = [
@@ -42,6 +42,18 @@ _FLAGS = [
      "evenly spread)"),
 ]  # fmt: skip
 _SHARED = ("ftol", "maxiter", "max_step")
+
+
+def reject_injection_flags(args) -> None:
+    """Raise :class:`CLIError` naming any injection flag given to a ramp (as an injection
+    rejects the ramp's flags)."""
+    given = [flag for flag, *_ in _FLAGS
+             if getattr(args, flag[2:].replace("-", "_"), None) is not None]  # fmt: skip
+    if given:
+        raise CLIError(
+            f"{', '.join(given)}: injection flag(s), not a ramp's (set kind = 'injection' in "
+            "the [protocol] table, or --protocol injection)"
+        )
 _RUN_KEYS = ("replicas", "seed", "out", "overwrite", "figure_lengths")
 
 
