@@ -71,7 +71,8 @@ class Injection:
     noise : float
         Standard deviation of a transverse displacement given to every node when it is
         released, in units of the segment rest length (breaks the symmetry of a radial
-        injection; scaled down by collision detection if needed). Default 0.01.
+        injection; clipped to a tenth of the hard-core width, and scaled down by collision
+        detection if needed). Default 0.01.
     ftol, maxiter, max_step :
         As for :class:`crumple.protocol.Ramp` (Newton only: the channel is a fixed mask).
 
@@ -272,6 +273,9 @@ def clamp_reaction(gradient, fixed, channel: Channel) -> float:
 
 ProgressCallback = Callable[[int, int, InjectionStage], None]
 
+#: The release kick's largest amplitude, in hard-core widths.
+KICK_CAP = 0.1
+
 #: Partial pushes (each followed by a relaxation) allowed in one sub-push before the mouth
 #: counts as blocked, the wire inside pressed against the channel's end.
 MAX_BLOCKED = 40
@@ -454,6 +458,10 @@ class _Injector:
             n = np.array([-self.channel.direction[1], self.channel.direction[0]])
             kick = np.zeros_like(self.x)
             amp = self.inj.noise * self.wire.rest_length * self.rng.standard_normal(idx.size)
+            # at most a tenth of the hard-core width: a larger kick, radial where the entry is
+            # near-tangential, throws the node into the wall's barrier (referee's S10)
+            cap = KICK_CAP * self.wire.hard_core
+            amp = np.clip(amp, -cap, cap)
             kick[idx] = amp[:, None] * n
             safe = min(max_safe_fraction(self.x, kick),
                        disc_exit_fraction(self.x[self.free], kick[self.free],
