@@ -28,7 +28,7 @@ import numpy as np
 from ..energy import confinement_weights
 from ..observables import mass_size_exponent, mass_within
 from ..paper import PaperValue
-from .cavity import INJECTION, RAMP, THICKNESS
+from .cavity import INJECTION, RAMP
 from .cavity_draw import discuss, draw
 from .common import Context, Estimate, Record, _alt, _combine, _f, _fit_replicas
 from .series import Series
@@ -82,14 +82,19 @@ def _final(s: Series, p: int, r: int) -> int:
     return int(ran[-1]) if ran.size else -1
 
 
+def _length(s: Series) -> float:
+    """The wire's contour length L0, from the store's manifest (default 1, as ``Wire``)."""
+    return float(s.wire.get("length", 1.0))
+
+
 def _phi_ramp(ramp: Series, p: int, r: int) -> np.ndarray:
-    return ramp.hard_core * 1.0 / (np.pi * ramp.obs["r_max"][p, r] ** 2)
+    return ramp.hard_core * _length(ramp) / (np.pi * ramp.obs["r_max"][p, r] ** 2)
 
 
 def _trap_pressure(ramp: Series, p: int, r: int) -> np.ndarray:
     """P = Σ 2λ w_i |x_i| / (2π r_max) at every stage ``[energy/length²]``."""
     x = ramp.positions[p, r]
-    w = confinement_weights(x.shape[1], "per-length", 1.0)
+    w = confinement_weights(x.shape[1], ramp.confinement, _length(ramp))
     force = 2.0 * ramp.lam * np.einsum("i,si->s", w, np.hypot(x[..., 0], x[..., 1]))
     return force / (2.0 * np.pi * ramp.obs["r_max"][p, r])
 
@@ -121,8 +126,11 @@ def _dm(x) -> float:
 
 
 def _radius(inj: Series) -> float:
-    """R_c, from the thickness (h = R_c/50)."""
-    return inj.hard_core / THICKNESS
+    """R_c, from the store's manifest."""
+    radius = inj.wire.get("cavity_radius")
+    if radius is None:
+        raise ValueError("the injection store's manifest names no cavity_radius")
+    return float(radius)
 
 
 def _matched(inj: Series, ramp: Series, p: int) -> dict:
@@ -138,10 +146,10 @@ def _matched(inj: Series, ramp: Series, p: int) -> dict:
         with np.errstate(invalid="ignore", divide="ignore"):
             k = int(np.nanargmin(np.abs(np.log(pr / phi))))
         out["cavity"].append(_stage_values(inj, p, r, j, inj.lam[j]))
-        out["ramp"].append(_stage_values(ramp, p, r, k, 1.0))
+        out["ramp"].append(_stage_values(ramp, p, r, k, _length(ramp)))
         out["phi"].append(float(phi))
         out["phi_ramp"].append(float(pr[k]))
-        out["stages"].append((j, k))
+        out["stages"].append((r, j, k))  # the replica with them: one may be skipped
     return out
 
 
@@ -251,8 +259,7 @@ def measure(ctx: Context) -> Record:
             _alt(f"n_loops ~ L_in^ν (stages with loops; {nu_note}), {label}", "cavity", nu,
                  inj.replicas),
             _alt(f"D_M about the cavity's centre at the final φ, {label}", "cavity",
-                 _est([inj.obs["D_M_center"][p, r, j] for r, (j, _) in
-                       zip(range(inj.replicas), m["stages"], strict=False)]), n, 1.9),
+                 _est([inj.obs["D_M_center"][p, r, j] for r, j, _ in m["stages"]]), n, 1.9),
         ]  # fmt: skip
         extra[label] = {"phi_matched": phi, "phi_ramp_matched": phir,
                         "cavity": {k: v.to_dict() for k, v in cav.items()},
@@ -318,9 +325,9 @@ def _detail(inj, ramp, p, m, win, kc, kr) -> dict:
         curves[name] = {"phi": np.array(phis), "pressure": np.array(press),
                         **{k: np.array(v) for k, v in vals.items()}}  # fmt: skip
     configs, mcurves = [], []
-    for r, (j, k) in enumerate(m["stages"]):
+    for r, j, k in m["stages"]:
         xc, xr = inj.positions[p, r, j], ramp.positions[p, r, k]
-        if r == 0:
+        if not configs:  # the first replica matched
             configs = [xc, xr, float(inj.lam[j]), float(ramp.lam[k])]
         for tag, x in (("cavity", xc[np.hypot(xc[:, 0], xc[:, 1]) < _radius(inj)]),
                        ("ramp", xr)):  # fmt: skip
