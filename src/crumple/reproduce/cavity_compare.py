@@ -349,7 +349,8 @@ def _claims(extra: dict) -> tuple:
             "claim": "stuffing the wire into a cavity shares the properties of confinement by "
                      f"a potential ({label})",
             "source": "the paper's introduction (open question)",
-            "measured": f"same within 2σ: {', '.join(same) or 'none'}; differ or not measured: "
+            "measured": f"same within 2σ: {', '.join(same) or 'none'}; differ, not measured "
+                        "or no verdict (σ unknown): "
                         f"{', '.join(k for k in _COMPARED if k not in same) or 'none'}",
             "criterion": "per observable at matched φ, |cavity − ramp| ≤ 2σ",
             "verdict": "shared" if len(same) == len(_COMPARED) else
