@@ -217,6 +217,8 @@ def _compare_row(key: str, quantity: str, cav: Estimate, ramp: Estimate, note: s
         "source": "potential confinement (ramp) of the same wire, this study",
         "ours": _f(cav.value),
         "sigma": _f(sigma),
+        "ours_sigma": _f(cav.sigma) if cav.n else None,
+        "paper_sigma": _f(ramp.sigma) if ramp.n else None,
         "deviation_sigma": _f(abs(diff) / sigma) if ok and sigma > 0 else None,
         "fit_range": None if cav.fit_range is None else [_f(v) for v in cav.fit_range],
         "replicas": replicas,
