@@ -163,7 +163,8 @@ def draw(results, lengths):
         [s.positions for s in stages], [s.injected_length for s in stages], w.cavity_radius,
         free=[s.free for s in stages], forces=[s.feed_force for s in stages],
         title=f"injection: k_b = {w.k_b:g}, k_s = {w.k_s:g}, N = {w.n_segments}, R_c = "
-        f"{w.cavity_radius:g}, h = {w.hard_core:g}; {res.stop_reason}",
+        f"{w.cavity_radius:g}, h = {w.hard_core:g}; stopped: "
+        f"{'stop length reached' if res.stop_reason == 'length' else 'jammed'}",
     )  # fmt: skip
 
 

@@ -175,7 +175,7 @@ CAVITY = Study(
     title="crumple: injection into a cavity against potential confinement",
     origin=_ORIGIN,
     conventions=_CONVENTIONS,
-    alternatives="Exponents beside the comparison: the feed force against L_in, the ramp's "
+    alternatives="Exponents beside the comparison: the injection force against L_in, the ramp's "
     "r_max against λ, the loops' growth with L_in, and D_M about the cavity's centre.",
     sections=sections,
     profiles=PROFILES,

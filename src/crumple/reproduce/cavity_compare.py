@@ -10,7 +10,8 @@ plastic. Measures, per replica and then replica mean ± σ (``_combine``):
   length, loops; a verdict each, "same within 2σ" or "differs";
 * force against size in the same units: the confining pressure P (the wall's total force
   over 2π R_c; the trap's Σ 2λ w_i |x_i| over 2π r_max) against φ, P ~ φ^κ, over the upper
-  decade of φ both reach; and, beside it, F(L_in) ~ L_in^β (the feed force) and
+  decade of φ both reach; and, beside it, F(L_in) ~ L_in^β (the injection force: the
+  pusher's work per length) and
   r_max ~ λ^α (the ramp);
 * against published numbers: D_M = 1.9 ± 0.1 in tight packing (Donato & Gomes), and the
   loop number's growth with injected length (Stoop et al. PRL 101, 094101), whose exponent
@@ -68,7 +69,8 @@ FIGURES = {
     "elastic (blue) and plastic (red), replica means: elastic energy per length, γ, contacts "
     "per length, loops; the matched φ marked",
     "cavity_force": "Force against size in the same units: (left) confining pressure P "
-    "against φ, both protocols, with the fitted κ; (right) the feed force F against L_in",
+    "against φ, both protocols, with the fitted κ; (right) the injection force F (the "
+    "pusher's work per length) against L_in",
     "cavity_mass": "M(R) about the centre of mass at matched packing, against R/r_max: cavity "
     "(solid) and potential (dashed), every replica; the fit range [0.5, 1] shaded",
 }
@@ -250,13 +252,13 @@ def measure(ctx: Context) -> Record:
             )
             rows.append(_compare_row(f"cavity_{k}_{label.split()[0]}", _quantity(k, label),
                                      cav[k], rmp[k], note, f"{n} per protocol"))  # fmt: skip
-        beta = _fit_window(inj.lam[None, :].repeat(inj.replicas, 0), inj.obs["feed_force"][p],
-                           (0.5 * np.nanmax(inj.lam), np.nanmax(inj.lam)))  # fmt: skip
+        beta = _force_exponent(inj, p)
         nu, nu_note = _loop_growth(inj, p)
         alpha = _alpha(ramp, p)
         alts += [
-            _alt(f"F ~ L_in^β (injection force = work per length; upper half of L_in: a "
-                 f"factor 2 only), {label}", "cavity", beta, inj.replicas),
+            _alt(f"F ~ L_in^β (injection force = work per length, from W = ∫F dL_in ~ "
+                 f"L_in^(1+β); upper half of L_in: a factor 2 only), {label}", "cavity", beta,
+                 inj.replicas),
             _alt(f"r_max ~ λ^α (λ ≥ 100), {label}", "potential", alpha, ramp.replicas, -0.25),
             _alt(f"n_loops ~ L_in^ν (stages with loops; {nu_note}), {label}", "cavity", nu,
                  inj.replicas),
@@ -274,6 +276,19 @@ def measure(ctx: Context) -> Record:
     claims = _claims(extra)
     return Record(rows=tuple(rows), alternatives=tuple(alts), claims=claims,
                   extra={"cavity": extra}, detail=detail)  # fmt: skip
+
+
+def _force_exponent(inj: Series, p: int) -> Estimate:
+    """β in F ~ L_in^β over the upper half of L_in, from the pusher's work
+    W(L_in) = ∫F dL_in ~ L_in^(1+β): W is positive and smooth where the per-stage F
+    oscillates and may be negative (a log fit of F would drop those stages)."""
+    lengths = inj.lam
+    steps = np.diff(np.concatenate([[0.0], lengths]))
+    work = np.cumsum(np.nan_to_num(inj.obs["feed_force"][p]) * steps, axis=-1)
+    work = np.where(np.isfinite(inj.obs["feed_force"][p]), work, np.nan)
+    top = float(np.nanmax(lengths))
+    w = _fit_window(lengths[None, :].repeat(inj.replicas, 0), work, (0.5 * top, top))
+    return Estimate(w.value - 1.0, w.sigma, w.n, w.fit_range, w.spread)
 
 
 def _alpha(ramp: Series, p: int) -> Estimate:

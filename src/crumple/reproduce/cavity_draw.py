@@ -105,7 +105,7 @@ def _force(rec):
     a.set_ylabel("P = confining force / 2πR [energy/length²]")
     a.legend(fontsize=7)
     b.set_xlabel("L_in [L0]")
-    b.set_ylabel("feed force F [energy/length]")
+    b.set_ylabel("injection force F (work per length) [energy/length]")
     b.legend(fontsize=7)
     fig.tight_layout()
     return fig
