@@ -157,8 +157,10 @@ def discuss(rec, records) -> dict[str, str]:
             counts[rows[key]["verdict"]] = counts.get(rows[key]["verdict"], 0) + 1
         summary = "; ".join(f"{n} {v}" for v, n in sorted(counts.items()))
         beta = ex["feed_force_exponent"]
-        trend = ("—" if beta["value"] is None else
-                 "grows" if beta["value"] > 0 else "falls")  # fmt: skip
+        b, sb = beta["value"], beta["sigma"] or 0.0
+        trend = ("is not measured" if b is None else
+                 "is flat within 2σ, going" if abs(b) <= 2 * sb else
+                 "grows" if b > 0 else "falls")  # fmt: skip
         out[f"cavity_pressure_exponent_{w}"] += (
             f" Of the {len(keys)} comparisons ({label}): {summary}. The injection force (work "
             f"per length) {trend} as L_in^{_v(beta)} over the upper half of the injection "
