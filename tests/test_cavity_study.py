@@ -33,6 +33,14 @@ def test_compare_row_verdicts():
     assert _compare_row("k", "q", Estimate(np.nan, np.nan, 0), b, "", "3")["verdict"] == (
         "not measured"
     )
+    # no verdict without a σ: one replica, or integer counts equal in every replica
+    one = Estimate(2.0, 0.0, 1)
+    assert _compare_row("k", "q", one, Estimate(3.0, 0.0, 1), "", "1")["verdict"].startswith(
+        "σ unknown (1 replica)")
+    same = Estimate(2.0, 0.0, 6)
+    assert _compare_row("k", "q", same, Estimate(3.0, 0.0, 6), "", "6")["verdict"].startswith(
+        "σ = 0 (identical replicas)")
+    assert _compare_row("k", "q", same, b, "", "6")["verdict"] == "differs"
 
 
 def test_study_smoke_report_is_complete(tmp_path):

@@ -172,7 +172,7 @@ def test_injection_checked_against_the_wire():
         Injection(angle=1.55).resolve(small_wire())
     with pytest.raises(ValueError, match="too short"):  # the channel inside is < a sub-push
         Injection(angle=1.5, max_push=0.03).resolve(small_wire(hard_core=1e-4))
-    assert Injection().resolve(small_wire()) == (0.05, 0.95, 0.0125)
+    assert Injection().resolve(small_wire()) == (0.05, 0.95, 0.00625)
 
 
 def test_packing_fraction_closed_form():
@@ -198,37 +198,74 @@ def check_stage(wire, inj, stage):
     assert not np.any(np.diff(free.astype(int)) > 0)
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def _checked_injector(checks: list):
+    """An ``_Injector`` that checks the state after every move, release and relaxation: free
+    nodes strictly inside, no crossing, the channel's nodes on the channel line."""
+    import crumple.injection as mod
+
+    class Checked(mod._Injector):
+        def _check(self, what):
+            x, free = self.x, self.free
+            assert np.all(np.hypot(*x[free].T) < self.wire.cavity_radius), what
+            assert not has_crossings(x), what
+            sigma = np.arange(self.wire.n_nodes) * self.wire.rest_length
+            line = self.channel.positions(sigma[~free], self.injected)
+            assert np.allclose(x[~free], line, atol=1e-12), what
+            checks.append(what)
+
+        def _release(self):
+            out = super()._release()
+            self._check("release")
+            return out
+
+        def _relax(self):
+            self._check("move")
+            out = super()._relax()
+            self._check("relaxation")
+            return out
+
+    return Checked
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
-    n=st.integers(10, 24),
-    radius=st.floats(0.06, 0.2),
+    n=st.integers(8, 16),
+    radius=st.floats(0.05, 0.2),
     push_segments=st.sampled_from([0.5, 1.0, 2.0]),
+    stop_segments=st.integers(1, 15),
     plastic=st.booleans(),
-    angle=st.floats(-0.8, 0.8),
+    angle=st.floats(-1.0, 1.0),
     seed=st.integers(0, 2**16),
 )
-def test_injection_never_leaves_the_cavity_nor_crosses(n, radius, push_segments, plastic, angle,
-                                                       seed):  # fmt: skip
+def test_injection_never_leaves_the_cavity_nor_crosses(n, radius, push_segments,
+                                                       stop_segments, plastic, angle, seed):
+    """Checked after every move, release and relaxation, up to a stop length of L - a (φ up
+    to 0.12 at R_c = 0.05), with plasticity and entry angles up to ±1 rad."""
     wire = small_wire(n, cavity_radius=radius, hard_core=radius / 50,
                       plasticity=Plasticity(s=0.2, theta_p=0.1) if plastic else None)  # fmt: skip
-    inj = Injection(push=push_segments * wire.rest_length, stop_length=0.6, angle=angle)
-    res = run_injection(wire, inj, seed=seed)
-    assert res.stages
+    a = wire.rest_length
+    stop = min(stop_segments, n - 1) * a
+    inj = Injection(push=push_segments * a, stop_length=stop, angle=angle)
+    checks: list = []
+    rng = np.random.default_rng(seed)
+    res = _checked_injector(checks)(wire, inj, rng).run(None)
+    assert res.stages and "relaxation" in checks and "move" in checks
     for stage in res.stages:
         check_stage(wire, inj, stage)
     assert res.stop_reason in ("length", "jammed")
     if res.stop_reason == "length":
-        assert math.isclose(res.injected_lengths[-1], 0.6)
+        assert math.isclose(res.injected_lengths[-1], stop)
 
 
 def _force_mismatch(div: int) -> tuple[int, float]:
-    """(stages compared, median |ΔE/δ / F̄ - 1|) of an injection pushed a segment / ``div``
-    per stage, over the pairs of stages with no release and F smooth on the scale δ."""
+    """(stages compared, median |ΔE/δ / F̄ - 1|, F the clamp's reaction) of an injection
+    pushed a segment / ``div`` per stage, over the pairs of stages with no release and F
+    smooth on the scale δ."""
     wire = small_wire(20)
     push = wire.rest_length / div
     res = run_injection(wire, Injection(push=push, stop_length=0.4, max_push=push), seed=0)
     assert res.converged
-    e, f = res.energies()["total"], res.feed_forces
+    e, f = res.energies()["total"], res.clamp_reactions
     rel = np.array([s.released for s in res.stages])
     de = np.diff(e) / push
     mean = 0.5 * (f[1:] + f[:-1])
@@ -237,8 +274,8 @@ def _force_mismatch(div: int) -> tuple[int, float]:
     return int(smooth.sum()), float(np.median(np.abs(de[smooth] / mean[smooth] - 1)))
 
 
-def test_feed_force_is_the_derivative_of_the_energy():
-    """ΔE/δ between two stages equals the mean of their feed forces (the trapezoidal rule for
+def test_clamp_reaction_is_the_derivative_of_the_energy_between_releases():
+    """ΔE/δ between two stages equals the mean of their clamp reactions (the trapezoidal rule for
     ∫F dL) to O(δ²), where no node was released (a release changes the constraints, not the
     energy, and the wire relaxes: docs/injection.md). Halving δ divides the mismatch by ~4."""
     n8, err8 = _force_mismatch(8)
@@ -250,14 +287,17 @@ def test_feed_force_is_the_derivative_of_the_energy():
 
 def test_a_wire_injected_along_the_wall_has_the_bending_of_the_circle():
     """Injected along the chord of the inscribed polygon (a wire shorter than the wall), the
-    wire lies on the wall: every joint on it turns by the polygon's angle, so it carries the
-    circle's bending energy per length B/(2 R_c²), to O((a/R_c)²). Its free tip, moment-free,
-    leaves the wall over a length of order R_c, a shape that then slides along the wall: so
-    from there on dE_b/dL_in is the circle's too."""
+    wire lies on the wall: every joint on it turns by the polygon's angle 2 asin(a/(2 R_c))
+    (to the wall's gap, < 2h/R_c = 2e-4 relative), so it carries the circle's bending energy
+    per length B/(2 R_c²) to O((a/R_c)²/12). Two boundary layers leave the wall: the free
+    tip, moment-free, over a length of order 2 R_c, and the clamped end at the mouth, which
+    lifts off by up to ~0.01 R_c over ~R_c whatever N; between them the shape slides along the
+    wall, so from there on dE_b/dL_in is the circle's too."""
     r, n = 0.1, 60
     wire = Wire(k_b=1.0, k_s=1e6, n_segments=n, cavity_radius=r)
     a = wire.rest_length
-    angle = 0.5 * math.pi - math.asin(a / (2 * r))
+    polygon = 2 * math.asin(a / (2 * r))
+    angle = 0.5 * math.pi - 0.5 * polygon
     res = run_injection(wire, Injection(stop_length=0.5, angle=angle), seed=0)
     assert res.converged
     circle = wire.bending_stiffness / (2 * r**2)
@@ -265,13 +305,12 @@ def test_a_wire_injected_along_the_wall_has_the_bending_of_the_circle():
     gap = r - np.hypot(*x.T)
     on_wall = free & (gap > 0) & (gap < 2 * wire.hard_core)
     joints = on_wall[:-2] & on_wall[1:-1] & on_wall[2:]
-    assert joints.sum() >= 8
-    per_length = 0.5 * wire.k_b * turning_angles(x)[joints] ** 2 / a
-    assert np.allclose(per_length, circle, rtol=(a / r) ** 2)
+    assert joints.sum() >= 6
+    assert np.allclose(turning_angles(x)[joints], polygon, rtol=1e-3)
     lengths, eb = res.injected_lengths, res.energies()["bending"]
     late = lengths >= 0.3
     slope = np.polyfit(lengths[late], eb[late], 1)[0]
-    assert math.isclose(slope, circle, rel_tol=(a / r) ** 2)
+    assert math.isclose(slope, circle, rel_tol=(a / r) ** 2 / 4)
 
 
 def test_jamming_stops_on_the_feed_force():
@@ -339,6 +378,11 @@ def test_cli_runs_an_injection_and_rejects_unknown_protocol_keys(tmp_path, capsy
     cfg.write_text('[protocol]\nkind = "ramp"\npush = 0.5\n')
     assert main(["run", "--config", str(cfg), "--out", str(tmp_path / "q")]) == 2
     assert "push" in capsys.readouterr().err
+    # the ramp rejects injection flags, as the injection rejects the ramp's (referee S6)
+    assert main(["run", "--push", "0.1", "--cavity-radius", "0.3", "--n-segments", "6",
+                 "--lambdas", "1,2", "--out", str(tmp_path / "r")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "--cavity-radius" in err and "--push" in err and not (tmp_path / "r").exists()
 
 
 def test_sweep_protocol_table():
@@ -391,3 +435,25 @@ def test_load_an_injection_store_with_n_swept(tmp_path):
     for k in ("feed_force", "packing_fraction", "contacts", "wall_contacts", "n_loops",
               "D_M_com", "D_M_center", "wall_force", "E_wall", "gamma"):  # fmt: skip
         assert k in ds
+
+
+def test_work_of_the_feed_force_is_the_stored_energy_on_the_default_protocol():
+    """With a frictionless feed the pusher's work is all stored: ∫F dL_in = E(L) - E(0) on the
+    default protocol, where every stage releases a node (issue 13, referee's B1). The clamp's
+    reaction overstates it: each release drops the energy."""
+    wire = small_wire(30)
+    res = run_injection(wire, Injection(), seed=1)
+    assert res.converged and res.stop_reason == "length"
+    rel = np.array([s.released for s in res.stages])
+    assert np.all(rel[1:] >= 1)  # releases included: the default protocol, not a quiet stretch
+    lengths = np.concatenate([[0.0], res.injected_lengths])
+    stored = res.energies()["total"][-1] - FedWireEnergy(
+        wire, np.zeros(wire.n_nodes, dtype=bool))(res.initial)[0]
+    work = float(np.sum(res.feed_forces * np.diff(lengths)))
+    assert stored > 0
+    # the remainder: ∫F dL over contact events, where F has kinks (2.5 % here)
+    assert math.isclose(work, stored, rel_tol=0.04), (work, stored)
+    clamp = float(np.sum(res.clamp_reactions * np.diff(lengths)))
+    assert clamp > 2 * stored  # what was stored as the feed force before (referee's B1)
+    drops = np.array([s.release_drop for s in res.stages])
+    assert np.all(drops > -1e-9) and drops.sum() > stored  # a release never stores energy

@@ -28,7 +28,11 @@ __all__ = ["INJECTION_OBSERVABLES", "inside", "measure_injection", "measure_stag
 INJECTION_OBSERVABLES = {
     "injected_length": ("length", "L_in, the length pushed into the cavity"),
     "packing_fraction": ("1", "φ = h L_in / (π R_c²), h the hard-core width"),
-    "feed_force": ("energy/length", "force of the pusher along the channel, Σ_fixed ∂E/∂x · u"),
+    "feed_force": ("energy/length", "injection force: the pusher's work per injected length over "
+                   "the stage (∫F dL_in is the energy stored, plus what snap-throughs dissipate)"),
+    "clamp_reaction": ("energy/length", "reaction of the rigid clamp along the channel at the "
+                       "equilibrium, Σ_fixed ∂E/∂x · u (not the injection force: releases)"),
+    "release_drop": ("energy", "energy the wire gave up relaxing after the stage's releases"),
     "wall_force": ("energy/length", "total force of the wall on the wire, Σ_free |∂E_wall/∂x_i| "
                    "(the confining pressure times 2π R_c)"),
     "contacts": ("1", "pairs of non-adjacent segments of the injected part closer than 2 d"),
@@ -92,6 +96,8 @@ def measure_injection(result: InjectionResult) -> dict[str, np.ndarray]:
     out["injected_length"] = result.injected_lengths
     out["packing_fraction"] = packing_fraction(result.wire, result.injected_lengths)
     out["feed_force"] = result.feed_forces
+    out["clamp_reaction"] = result.clamp_reactions
+    out["release_drop"] = np.array([s.release_drop for s in result.stages])
     w = result.wire
     for s, st in enumerate(result.stages):
         for k, v in measure_stage(st.positions, w).items():

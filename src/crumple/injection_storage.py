@@ -54,7 +54,9 @@ __all__ = [
 ]
 
 FORMAT = "crumple-injections"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Version 1 stored the rigid clamp's reaction as ``feed_force`` (issue 13, referee's B1).
+_OLDEST = 2
 _TERMS = ("bending", "stretching", "hard_core", "wall", "total")
 _COUNTS = ("iterations", "evaluations", "hessian_evaluations")
 
@@ -161,6 +163,11 @@ def verify_injections(path, *, run_id: str | None = None) -> dict:
             attrs = {k: _decode(v) for k, v in f.attrs.items()}
             if attrs.get("format") != FORMAT:
                 raise ValueError(f"{path} is not a crumple injection file")
+            if attrs.get("format_version", 0) < _OLDEST:
+                raise ValueError(
+                    f"{path} is format version {attrs.get('format_version')}: its feed_force is "
+                    "the rigid clamp's reaction, not the injection force; run it again"
+                )
             if attrs.get("complete") is not True:
                 raise ValueError(f"{path} is incomplete (no 'complete' marker)")
             if run_id is not None and attrs.get("run_id") != run_id:
@@ -224,6 +231,8 @@ def load_injections(path) -> list[InjectionResult]:
                 energy=energy, result=res,
                 feed_force=float(a["observables/feed_force"][r, s]), free=a["free"][r, s],
                 released=int(a["released"][r, s]),
+                clamp_reaction=float(a["observables/clamp_reaction"][r, s]),
+                release_drop=float(a["observables/release_drop"][r, s]),
             ))  # fmt: skip
         rest = a.get("rest_angles")
         out.append(InjectionResult(

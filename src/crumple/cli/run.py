@@ -427,6 +427,9 @@ def cmd_run(args) -> int:
         from .run_injection import cmd_injection
 
         return cmd_injection(args, cfg)
+    from .run_injection import reject_injection_flags
+
+    reject_injection_flags(args)
     wire, ramp, run = build_run(args)
     n_rep = run["replicas"]
     seed = run.get("seed", 0)

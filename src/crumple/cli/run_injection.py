@@ -19,7 +19,7 @@ import numpy as np
 
 from .inputs import CLIError, floats, positive_int
 
-__all__ = ["add_injection_flags", "cmd_injection"]
+__all__ = ["add_injection_flags", "cmd_injection", "reject_injection_flags"]
 
 #: Injection flags: (flag, Injection key or None, type, help).
 _FLAGS = [
@@ -35,13 +35,25 @@ _FLAGS = [
     ("--jam-force", "jam_force", float, "injection: stop when the feed force exceeds this "
      "[energy/length] (default: never)"),
     ("--max-push", "max_push", float, "injection: largest channel move per minimisation "
-     "[length] (default a quarter segment)"),
+     "[length] (default an eighth of a segment)"),
     ("--noise", "noise", float, "injection: transverse kick of a released node [segment "
      "lengths] (default 0.01)"),
     ("--figure-lengths", None, str, "injection: injected lengths to draw (default: four, "
      "evenly spread)"),
 ]  # fmt: skip
 _SHARED = ("ftol", "maxiter", "max_step")
+
+
+def reject_injection_flags(args) -> None:
+    """Raise :class:`CLIError` naming any injection flag given to a ramp (as an injection
+    rejects the ramp's flags)."""
+    given = [flag for flag, *_ in _FLAGS
+             if getattr(args, flag[2:].replace("-", "_"), None) is not None]  # fmt: skip
+    if given:
+        raise CLIError(
+            f"{', '.join(given)}: injection flag(s), not a ramp's (set kind = 'injection' in "
+            "the [protocol] table, or --protocol injection)"
+        )
 _RUN_KEYS = ("replicas", "seed", "out", "overwrite", "figure_lengths")
 
 
@@ -151,7 +163,8 @@ def draw(results, lengths):
         [s.positions for s in stages], [s.injected_length for s in stages], w.cavity_radius,
         free=[s.free for s in stages], forces=[s.feed_force for s in stages],
         title=f"injection: k_b = {w.k_b:g}, k_s = {w.k_s:g}, N = {w.n_segments}, R_c = "
-        f"{w.cavity_radius:g}, h = {w.hard_core:g}; {res.stop_reason}",
+        f"{w.cavity_radius:g}, h = {w.hard_core:g}; stopped: "
+        f"{'stop length reached' if res.stop_reason == 'length' else 'jammed'}",
     )  # fmt: skip
 
 

@@ -157,9 +157,10 @@ _CONVENTIONS = (
     "confining force)/(2π R): the wall's force over 2π R_c, the trap's Σ 2λ w_i |x_i| over "
     "2π r_max. Values are replica means; σ combines the standard error of the mean and the "
     "fits' regression errors in quadrature; 'same within 2σ' when |cavity − ramp| ≤ "
-    "2 (σ_cavity² + σ_ramp²)^1/2, else 'differs'. In the main table the 'paper' column "
-    "holds the potential's value and 'ours' the cavity's. Loops are the reproduction's (closed "
-    "by wire-wire contacts at 2d): regions closed by the wall are not counted."
+    "2 (σ_cavity² + σ_ramp²)^1/2, else 'differs'; no verdict where σ = 0 (one replica, or "
+    "identical integer counts). The main table gives each protocol's value with its own σ, "
+    "and |cavity − potential| over the combined σ. Loops are the reproduction's (closed by "
+    "wire-wire contacts at 2d): regions closed by the wall are not counted."
 )
 _ORIGIN = (
     "A study beyond the paper (issue 13): the protocol is the experiments' (Donato et al., "
@@ -174,9 +175,10 @@ CAVITY = Study(
     title="crumple: injection into a cavity against potential confinement",
     origin=_ORIGIN,
     conventions=_CONVENTIONS,
-    alternatives="Exponents beside the comparison: the feed force against L_in, the ramp's "
+    alternatives="Exponents beside the comparison: the injection force against L_in, the ramp's "
     "r_max against λ, the loops' growth with L_in, and D_M about the cavity's centre.",
     sections=sections,
     profiles=PROFILES,
     profile_fields=tuple(CavityProfile.__dataclass_fields__),
+    comparison=("Cavity against potential at matched packing", "cavity", "potential"),
 )

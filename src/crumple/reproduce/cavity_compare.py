@@ -10,7 +10,8 @@ plastic. Measures, per replica and then replica mean ± σ (``_combine``):
   length, loops; a verdict each, "same within 2σ" or "differs";
 * force against size in the same units: the confining pressure P (the wall's total force
   over 2π R_c; the trap's Σ 2λ w_i |x_i| over 2π r_max) against φ, P ~ φ^κ, over the upper
-  decade of φ both reach; and, beside it, F(L_in) ~ L_in^β (the feed force) and
+  decade of φ both reach; and, beside it, F(L_in) ~ L_in^β (the injection force: the
+  pusher's work per length) and
   r_max ~ λ^α (the ramp);
 * against published numbers: D_M = 1.9 ± 0.1 in tight packing (Donato & Gomes), and the
   loop number's growth with injected length (Stoop et al. PRL 101, 094101), whose exponent
@@ -28,7 +29,7 @@ import numpy as np
 from ..energy import confinement_weights
 from ..observables import mass_size_exponent, mass_within
 from ..paper import PaperValue
-from .cavity import INJECTION, RAMP, THICKNESS
+from .cavity import INJECTION, RAMP
 from .cavity_draw import discuss, draw
 from .common import Context, Estimate, Record, _alt, _combine, _f, _fit_replicas
 from .series import Series
@@ -68,7 +69,8 @@ FIGURES = {
     "elastic (blue) and plastic (red), replica means: elastic energy per length, γ, contacts "
     "per length, loops; the matched φ marked",
     "cavity_force": "Force against size in the same units: (left) confining pressure P "
-    "against φ, both protocols, with the fitted κ; (right) the feed force F against L_in",
+    "against φ, both protocols, with the fitted κ; (right) the injection force F (the "
+    "pusher's work per length) against L_in",
     "cavity_mass": "M(R) about the centre of mass at matched packing, against R/r_max: cavity "
     "(solid) and potential (dashed), every replica; the fit range [0.5, 1] shaded",
 }
@@ -82,14 +84,19 @@ def _final(s: Series, p: int, r: int) -> int:
     return int(ran[-1]) if ran.size else -1
 
 
+def _length(s: Series) -> float:
+    """The wire's contour length L0, from the store's manifest (default 1, as ``Wire``)."""
+    return float(s.wire.get("length", 1.0))
+
+
 def _phi_ramp(ramp: Series, p: int, r: int) -> np.ndarray:
-    return ramp.hard_core * 1.0 / (np.pi * ramp.obs["r_max"][p, r] ** 2)
+    return ramp.hard_core * _length(ramp) / (np.pi * ramp.obs["r_max"][p, r] ** 2)
 
 
 def _trap_pressure(ramp: Series, p: int, r: int) -> np.ndarray:
     """P = Σ 2λ w_i |x_i| / (2π r_max) at every stage ``[energy/length²]``."""
     x = ramp.positions[p, r]
-    w = confinement_weights(x.shape[1], "per-length", 1.0)
+    w = confinement_weights(x.shape[1], ramp.confinement, _length(ramp))
     force = 2.0 * ramp.lam * np.einsum("i,si->s", w, np.hypot(x[..., 0], x[..., 1]))
     return force / (2.0 * np.pi * ramp.obs["r_max"][p, r])
 
@@ -121,8 +128,11 @@ def _dm(x) -> float:
 
 
 def _radius(inj: Series) -> float:
-    """R_c, from the thickness (h = R_c/50)."""
-    return inj.hard_core / THICKNESS
+    """R_c, from the store's manifest."""
+    radius = inj.wire.get("cavity_radius")
+    if radius is None:
+        raise ValueError("the injection store's manifest names no cavity_radius")
+    return float(radius)
 
 
 def _matched(inj: Series, ramp: Series, p: int) -> dict:
@@ -138,10 +148,10 @@ def _matched(inj: Series, ramp: Series, p: int) -> dict:
         with np.errstate(invalid="ignore", divide="ignore"):
             k = int(np.nanargmin(np.abs(np.log(pr / phi))))
         out["cavity"].append(_stage_values(inj, p, r, j, inj.lam[j]))
-        out["ramp"].append(_stage_values(ramp, p, r, k, 1.0))
+        out["ramp"].append(_stage_values(ramp, p, r, k, _length(ramp)))
         out["phi"].append(float(phi))
         out["phi_ramp"].append(float(pr[k]))
-        out["stages"].append((j, k))
+        out["stages"].append((r, j, k))  # the replica with them: one may be skipped
     return out
 
 
@@ -194,6 +204,10 @@ def _compare_row(key: str, quantity: str, cav: Estimate, ramp: Estimate, note: s
         verdict = "undefined in the cavity (hollow packing: M = 0 at R = r_max/2)"
     elif not ok:
         verdict = "not measured"
+    elif sigma == 0 and min(cav.n, ramp.n) < 2:
+        verdict = "σ unknown (1 replica): no verdict"
+    elif sigma == 0:
+        verdict = "σ = 0 (identical replicas): no verdict"
     elif abs(diff) <= 2 * sigma:
         verdict = "same within 2σ"
     else:
@@ -205,6 +219,8 @@ def _compare_row(key: str, quantity: str, cav: Estimate, ramp: Estimate, note: s
         "source": "potential confinement (ramp) of the same wire, this study",
         "ours": _f(cav.value),
         "sigma": _f(sigma),
+        "ours_sigma": _f(cav.sigma) if cav.n else None,
+        "paper_sigma": _f(ramp.sigma) if ramp.n else None,
         "deviation_sigma": _f(abs(diff) / sigma) if ok and sigma > 0 else None,
         "fit_range": None if cav.fit_range is None else [_f(v) for v in cav.fit_range],
         "replicas": replicas,
@@ -236,23 +252,24 @@ def measure(ctx: Context) -> Record:
             )
             rows.append(_compare_row(f"cavity_{k}_{label.split()[0]}", _quantity(k, label),
                                      cav[k], rmp[k], note, f"{n} per protocol"))  # fmt: skip
-        beta = _fit_window(inj.lam[None, :].repeat(inj.replicas, 0), inj.obs["feed_force"][p],
-                           (0.5 * np.nanmax(inj.lam), np.nanmax(inj.lam)))  # fmt: skip
-        nu = _loop_growth(inj, p)
+        beta = _force_exponent(inj, p)
+        nu, nu_note = _loop_growth(inj, p)
         alpha = _alpha(ramp, p)
         alts += [
-            _alt(f"F ~ L_in^β (feed force, upper half of L_in), {label}", "cavity", beta,
+            _alt(f"F ~ L_in^β (injection force = work per length, from W = ∫F dL_in ~ "
+                 f"L_in^(1+β); upper half of L_in: a factor 2 only), {label}", "cavity", beta,
                  inj.replicas),
             _alt(f"r_max ~ λ^α (λ ≥ 100), {label}", "potential", alpha, ramp.replicas, -0.25),
-            _alt(f"n_loops ~ L_in^ν (stages with loops), {label}", "cavity", nu, inj.replicas),
+            _alt(f"n_loops ~ L_in^ν (stages with loops; {nu_note}), {label}", "cavity", nu,
+                 inj.replicas),
             _alt(f"D_M about the cavity's centre at the final φ, {label}", "cavity",
-                 _est([inj.obs["D_M_center"][p, r, j] for r, (j, _) in
-                       zip(range(inj.replicas), m["stages"], strict=False)]), n, 1.9),
+                 _est([inj.obs["D_M_center"][p, r, j] for r, j, _ in m["stages"]]), n, 1.9),
         ]  # fmt: skip
         extra[label] = {"phi_matched": phi, "phi_ramp_matched": phir,
                         "cavity": {k: v.to_dict() for k, v in cav.items()},
                         "ramp": {k: v.to_dict() for k, v in rmp.items()},
                         "feed_force_exponent": beta.to_dict(), "loop_exponent": nu.to_dict(),
+                        "loop_exponent_note": nu_note,
                         "alpha_ramp": alpha.to_dict(), "pressure_window": list(win),
                         "stop_reasons": [str(v) for v in inj.obs["stop_reason"][p]]}  # fmt: skip
         detail["wires"][label] = _detail(inj, ramp, p, m, win, kc, kr)
@@ -261,15 +278,45 @@ def measure(ctx: Context) -> Record:
                   extra={"cavity": extra}, detail=detail)  # fmt: skip
 
 
+def _force_exponent(inj: Series, p: int) -> Estimate:
+    """β in F ~ L_in^β over the upper half of L_in, from the pusher's work
+    W(L_in) = ∫F dL_in ~ L_in^(1+β): W is positive and smooth where the per-stage F
+    oscillates and may be negative (a log fit of F would drop those stages)."""
+    lengths = inj.lam
+    steps = np.diff(np.concatenate([[0.0], lengths]))
+    work = np.cumsum(np.nan_to_num(inj.obs["feed_force"][p]) * steps, axis=-1)
+    work = np.where(np.isfinite(inj.obs["feed_force"][p]), work, np.nan)
+    top = float(np.nanmax(lengths))
+    w = _fit_window(lengths[None, :].repeat(inj.replicas, 0), work, (0.5 * top, top))
+    return Estimate(w.value - 1.0, w.sigma, w.n, w.fit_range, w.spread)
+
+
 def _alpha(ramp: Series, p: int) -> Estimate:
     ok = ramp.lam >= 100.0
     return _fit_replicas(ramp.lam[ok], ramp.obs["r_max"][p][:, ok])
 
 
-def _loop_growth(inj: Series, p: int) -> Estimate:
-    """ν in n_loops ~ L_in^ν over the stages with at least one loop."""
-    y = inj.obs["n_loops"][p]
-    return _fit_replicas(inj.lam, np.where(y >= 1, y, np.nan))
+#: ν is fitted only over a factor this large in n_loops (or a decade in L_in): a staircase of
+#: one or two loops is not a power law.
+LOOP_RANGE = 4.0
+
+
+def _loop_growth(inj: Series, p: int) -> tuple[Estimate, str]:
+    """ν in n_loops ~ L_in^ν over the stages with at least one loop, and a note; NaN with
+    "too few loops" where no replica spans :data:`LOOP_RANGE` in n_loops nor a decade in
+    L_in."""
+    y = np.where(inj.obs["n_loops"][p] >= 1, inj.obs["n_loops"][p], np.nan)
+    spans = []
+    for yr in y:
+        ok = np.isfinite(yr)
+        if ok.sum() >= 3:
+            spans.append((np.nanmax(yr) / np.nanmin(yr), inj.lam[ok].max() / inj.lam[ok].min()))
+    if not any(n >= LOOP_RANGE or lr >= 10.0 for n, lr in spans):
+        top = max((n for n, _ in spans), default=math.nan)
+        return Estimate(math.nan, math.nan, 0), (
+            f"too few loops: n_loops spans a factor {top:.3g} at most (needs {LOOP_RANGE:g} or a "
+            f"decade in L_in)")
+    return _fit_replicas(inj.lam, y), "fitted"
 
 
 def _detail(inj, ramp, p, m, win, kc, kr) -> dict:
@@ -295,9 +342,9 @@ def _detail(inj, ramp, p, m, win, kc, kr) -> dict:
         curves[name] = {"phi": np.array(phis), "pressure": np.array(press),
                         **{k: np.array(v) for k, v in vals.items()}}  # fmt: skip
     configs, mcurves = [], []
-    for r, (j, k) in enumerate(m["stages"]):
+    for r, j, k in m["stages"]:
         xc, xr = inj.positions[p, r, j], ramp.positions[p, r, k]
-        if r == 0:
+        if not configs:  # the first replica matched
             configs = [xc, xr, float(inj.lam[j]), float(ramp.lam[k])]
         for tag, x in (("cavity", xc[np.hypot(xc[:, 0], xc[:, 1]) < _radius(inj)]),
                        ("ramp", xr)):  # fmt: skip
@@ -319,7 +366,8 @@ def _claims(extra: dict) -> tuple:
             "claim": "stuffing the wire into a cavity shares the properties of confinement by "
                      f"a potential ({label})",
             "source": "the paper's introduction (open question)",
-            "measured": f"same within 2σ: {', '.join(same) or 'none'}; differ or not measured: "
+            "measured": f"same within 2σ: {', '.join(same) or 'none'}; differ, not measured "
+                        "or no verdict (σ unknown): "
                         f"{', '.join(k for k in _COMPARED if k not in same) or 'none'}",
             "criterion": "per observable at matched φ, |cavity − ramp| ≤ 2σ",
             "verdict": "shared" if len(same) == len(_COMPARED) else
@@ -335,7 +383,8 @@ def _claims(extra: dict) -> tuple:
             "measured": f"ν = {_fmt(nu)} in n_loops ~ L_in^ν, {label}",
             "criterion": "a power law over the stages with loops (we state our exponent; the "
                          "number is not compared with theirs, which we do not quote)",
-            "verdict": "measured" if nu["value"] is not None else "not measured (no loops)",
+            "verdict": "measured" if nu["value"] is not None else
+                       f"not measured ({ex.get('loop_exponent_note', 'no loops')})",
         })  # fmt: skip
     return tuple(out)
 
@@ -344,7 +393,8 @@ def _same(ex, k) -> bool:
     c, r = ex["cavity"][k], ex["ramp"][k]
     if c["value"] is None or r["value"] is None:
         return False
-    return abs(c["value"] - r["value"]) <= 2 * math.hypot(c["sigma"] or 0.0, r["sigma"] or 0.0)
+    sigma = math.hypot(c["sigma"] or 0.0, r["sigma"] or 0.0)
+    return sigma > 0 and abs(c["value"] - r["value"]) <= 2 * sigma
 
 
 def _published_dm(label: str, dm: dict) -> dict:

@@ -105,7 +105,7 @@ def _force(rec):
     a.set_ylabel("P = confining force / 2πR [energy/length²]")
     a.legend(fontsize=7)
     b.set_xlabel("L_in [L0]")
-    b.set_ylabel("feed force F [energy/length]")
+    b.set_ylabel("injection force F (work per length) [energy/length]")
     b.legend(fontsize=7)
     fig.tight_layout()
     return fig
@@ -141,28 +141,46 @@ def draw(rec) -> dict:
 
 
 def discuss(rec, records) -> dict[str, str]:
-    """What the numbers say, row by row, from the record's own numbers."""
+    """What the numbers say, row by row, generated from the record's own numbers (verdicts,
+    ratios, signs): no sentence that a number can contradict."""
     out = {}
+    rows = {row["key"]: row for row in rec.rows}
     for label, ex in rec.extra["cavity"].items():
         w = label.split()[0]
         c, r = ex["cavity"], ex["ramp"]
-        dm_c, dm_r = c["D_M"]["value"], r["D_M"]["value"]
-        out[f"cavity_D_M_{w}"] = (
-            "The cavity's packing is hollow about its centre of mass (M = 0 at R = r_max/2), "
-            "so D_M is undefined on the reproduction's range there."
-            if dm_c is None else
-            f"D_M {dm_c:.3g} in the cavity against {dm_r if dm_r is None else round(dm_r, 3)} "
-            f"under the potential at φ ≈ {ex['phi_matched']:.3g}: the wall holds the wire on a "
-            "circle (wall contacts), so mass sits at large R, which raises the slope of M(R) "
-            "over [0.5, 1] r_max."
+        keys = [k for k in rows if k.startswith("cavity_") and k.endswith(f"_{w}")]
+        for key in keys:
+            k = key[len("cavity_"):-len(f"_{w}")]
+            out[key] = _row_sentence(k, c[k], r[k], rows[key]["verdict"], ex)
+        counts: dict[str, int] = {}
+        for key in keys:
+            counts[rows[key]["verdict"]] = counts.get(rows[key]["verdict"], 0) + 1
+        summary = "; ".join(f"{n} {v}" for v, n in sorted(counts.items()))
+        beta = ex["feed_force_exponent"]
+        b, sb = beta["value"], beta["sigma"] or 0.0
+        trend = ("is not measured" if b is None else
+                 "is flat within 2σ, going" if abs(b) <= 2 * sb else
+                 "grows" if b > 0 else "falls")  # fmt: skip
+        out[f"cavity_pressure_exponent_{w}"] += (
+            f" Of the {len(keys)} comparisons ({label}): {summary}. The injection force (work "
+            f"per length) {trend} as L_in^{_v(beta)} over the upper half of the injection "
+            "(L_in over a factor 2 only)."
         )  # fmt: skip
-        out[f"cavity_pressure_exponent_{w}"] = (
-            f"Pressure against packing over φ ∈ [{ex['pressure_window'][0]:.3g}, "
-            f"{ex['pressure_window'][1]:.3g}]: κ = {_v(c['pressure_exponent'])} in the cavity, "
-            f"{_v(r['pressure_exponent'])} under the potential; the feed force grows as "
-            f"L_in^{_v(ex['feed_force_exponent'])} over the upper half of the injection."
-        )
     return out
+
+
+def _row_sentence(k: str, c: dict, r: dict, verdict: str, ex: dict) -> str:
+    """One row's sentence: the two values, their ratio and the verdict."""
+    cv, rv = c["value"], r["value"]
+    if cv is None or rv is None:
+        return (f"{k}: cavity {_v(c)}, potential {_v(r)}: {verdict}.")
+    ratio = f"; cavity/potential = {cv / rv:.3g}" if rv != 0 else ""
+    where = (f"over φ ∈ [{ex['pressure_window'][0]:.3g}, {ex['pressure_window'][1]:.3g}]"
+             if k == "pressure_exponent" else
+             f"at φ = {ex['phi_matched']:.3g} (cavity) / {ex['phi_ramp_matched']:.3g} "
+             "(potential)")  # fmt: skip
+    return (f"{k} {where}: cavity {_v(c)}, potential {_v(r)} (the cavity's is "
+            f"{'lower' if cv < rv else 'higher' if cv > rv else 'equal'}{ratio}): {verdict}.")
 
 
 def _v(e: dict) -> str:

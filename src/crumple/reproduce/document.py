@@ -188,6 +188,34 @@ def _table(an: Analysis) -> list[tuple]:
     ]
 
 
+def _comparison_table(an: Analysis, heading: str, a: str, b: str) -> list[tuple]:
+    """A study's own main table: two measurements of the same observable (``a`` ± σ, ``b`` ±
+    σ, their difference over the combined σ, the verdict), and the discussion of each row."""
+    head = ["quantity", f"{a} ± σ", f"{b} ± σ", f"|{a} − {b}|/σ", "verdict", "fit range",
+            "replicas"]  # fmt: skip
+    body = [
+        [
+            r["quantity"],
+            _num(r["ours"], r.get("ours_sigma")),
+            "—" if r["paper"] is None or r["paper"] != r["paper"]
+            else _num(r["paper"], r.get("paper_sigma")),
+            _deviation(r),
+            r["verdict"],
+            _range(r["fit_range"]),
+            r["replicas"],
+        ]
+        for r in an.rows
+    ]
+    disc = _discussion(an)
+    items = [
+        f"**{r['quantity']}** — {r['verdict']}. {r['note']}." + (
+            f" {disc[r['key']]}" if r["key"] in disc else "")
+        for r in an.rows
+    ]
+    return [("h2", heading), ("table", head, body), ("h3", "Discussion of each row"),
+            ("list", items)]  # fmt: skip
+
+
 def _claims_and_alternatives(an: Analysis, alternatives: str) -> list[tuple]:
     claims = [
         [
@@ -231,15 +259,17 @@ def blocks(
     origin: str = _ORIGIN,
     conventions: str = _CONVENTIONS,
     alternatives: str = _ALTERNATIVES,
+    comparison: tuple[str, str, str] | None = None,
 ) -> list[tuple]:
     """The whole report as blocks (:mod:`.render`); ``meta`` is ``profile.json``. The texts
     default to the paper's reproduction; another study passes its own
-    (:meth:`.study.Study.text`)."""
+    (:meth:`.study.Study.text`), and ``comparison`` (heading, label a, label b) for a main
+    table of two measurements of its own instead of the paper's numbers."""
     figs = [("fig", stem, cap) for stem, cap in registry.figures(an.sections).items()]
     return [
         *_head(an, meta, title, origin, conventions),
         *_runs(an),
-        *_table(an),
+        *(_table(an) if comparison is None else _comparison_table(an, *comparison)),
         *_claims_and_alternatives(an, alternatives),
         ("h2", "Figures"),
         *figs,

@@ -79,6 +79,7 @@ class Series:
     obs: dict[str, np.ndarray] = field(default_factory=dict)
     iterations: np.ndarray | None = None  # (point, replica, lam): Newton iterations, Powell sweeps
     confinement: str = paper.CONFINEMENT
+    wire: dict = field(default_factory=dict)  # the sweep manifest's wire table (as given)
 
     def index(self, key) -> int:
         return self.keys.index(tuple(float(k) for k in key))
@@ -122,6 +123,7 @@ class Series:
             hard_core=self.hard_core,
             obs={k: take(v) for k, v in self.obs.items()},
             confinement=self.confinement,
+            wire=self.wire,
         )
 
     @property
@@ -148,7 +150,7 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
     m = json.loads(ds.attrs["sweep"])
     hard_core = float(m.get("wire", {}).get("hard_core", 1e-5))
     if ds.attrs.get("protocol") == "injection":
-        return _injection_series(ds, keys, incomplete, hard_core)
+        return _injection_series(ds, keys, incomplete, hard_core, m.get("wire", {}))
     s = Series(
         keys=keys,
         lam=ds["lam"].values.astype(float),
@@ -164,6 +166,7 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
         hard_core=hard_core,
         iterations=ds["iterations"].values if "iterations" in ds else None,
         confinement=str(m.get("wire", {}).get("confinement", paper.CONFINEMENT)),
+        wire=dict(m.get("wire", {})),
     )
     s.obs.update({k: ds[k].values for k in OBSERVABLES})
     s.obs.update({k: s.obs[v] for k, v in _ALIASES.items()})
@@ -176,8 +179,9 @@ def _series(store: Path, levels: tuple[str, ...]) -> Series:
     return s
 
 
-def _injection_series(ds, keys, incomplete, hard_core) -> Series:
-    """An injection store as a :class:`Series`: ``lam`` holds the injected lengths L_in, the
+def _injection_series(ds, keys, incomplete, hard_core, wire: dict) -> Series:
+    """An injection store as a :class:`Series`: ``lam`` holds the injected lengths L_in (not
+    a λ: the name is the ramp's axis), the
     energies are the injection's (``wall`` added, ``confinement`` zero), ``obs`` the
     injection's observables (:data:`crumple.injection_observables.INJECTION_OBSERVABLES`)
     and ``gamma``."""
@@ -196,6 +200,7 @@ def _injection_series(ds, keys, incomplete, hard_core) -> Series:
         done=ds["done"].values,
         incomplete=incomplete,
         hard_core=hard_core,
+        wire=dict(wire),
     )
     s.obs.update({k: ds[k].values for k in INJECTION_OBSERVABLES})
     s.obs["gamma"] = ds["gamma"].values

@@ -37,6 +37,9 @@ class Study:
     sections: Callable[[], tuple[Any, ...]]
     profiles: Mapping[str, Any]
     profile_fields: tuple[str, ...]
+    #: Main table: None, the paper's numbers (paper against ours, both readings of Eq. 1);
+    #: (heading, label a, label b), a comparison of two measurements of this study.
+    comparison: tuple[str, str, str] | None = None
 
     def text(self) -> dict:
         """The keyword texts of :func:`.document.blocks`."""
@@ -45,6 +48,7 @@ class Study:
             "origin": self.origin,
             "conventions": self.conventions,
             "alternatives": self.alternatives,
+            "comparison": self.comparison,
         }
 
 

@@ -31,7 +31,8 @@ def load_injection_store(out: Path, m: dict, *, positions: bool = False):
     undefined), ``converged``, ``max_force``, ``iterations``, ``evaluations``,
     ``hessian_evaluations``, ``released`` and every entry of
     :data:`crumple.injection_observables.INJECTION_OBSERVABLES` (``packing_fraction``,
-    ``feed_force``, ``contacts``, ``wall_contacts``, ``n_loops``, ``D_M_center``,
+    ``feed_force`` (the injection force), ``clamp_reaction``, ``release_drop``, ``contacts``,
+    ``wall_contacts``, ``n_loops``, ``D_M_center``,
     ``D_M_com``, ``r_max``, ``injected_length``), their units and meaning in the attributes.
     Per run: ``done``, ``seconds``, ``n_stages``, ``run_id``, ``stop_reason``. With
     ``positions=True``, ``positions`` (…, ``replica``, ``L_in``, ``node``, ``xy``).
