@@ -117,17 +117,18 @@ def _ours(r: dict) -> str:
     if r.get("bracket") and r["ours"] is not None:
         return f"{r['ours']:g} (bracket {_range(r['fit_range'], True)})"
     hollow = r.get("hollow")
+    rods = f"; {hollow['rods']}/{hollow['of']} wires rods" if hollow and hollow.get("rods") else ""
     if hollow and hollow["wires"]:
         inner = hollow["inner"]
         where = (
-            f"; where the wire has mass, [{inner['fit_range'][0]:.2f}, 1]: "
+            f"; where the wire has mass, {hollow.get('inner_range', '—')}: "
             f"{_num(inner['value'], inner['sigma'])}"
             if inner["value"] is not None
             else ""
         )
         what = _num(r["ours"], r["sigma"]) if r["ours"] is not None else "cannot be fitted"
-        return f"{what} ({hollow['wires']}/{hollow['of']} wires hollow rings{where})"
-    return _num(r["ours"], r["sigma"])
+        return f"{what} ({hollow['wires']}/{hollow['of']} wires hollow rings{where}{rods})"
+    return _num(r["ours"], r["sigma"]) + (f" ({rods[2:]})" if rods else "")
 
 
 def _twin_cells(r: dict | None) -> list[str]:
