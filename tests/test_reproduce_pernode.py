@@ -243,3 +243,14 @@ def test_the_collapse_sentence_follows_the_scatter():
     drop = {"scatter_uncollapsed": 0.30, "scatter": 0.10, "exponent": 0.04}
     assert "does collapse them" in _collapse_says(drop)
     assert "no power" not in _collapse_says(drop)
+
+
+def test_the_fit_range_column_shows_the_per_node_range_where_it_differs():
+    from crumple.reproduce.document import _fit_range_cell
+
+    row = {"fit_range": [0.5, 1.0], "per_node": {"fit_range": [0.5, 1.0]}}
+    assert _fit_range_cell(row) == "[0.5, 1]"
+    row["per_node"]["fit_range"] = [0.56, 1.0]
+    assert _fit_range_cell(row) == "[0.5, 1] (per node [0.56, 1])"
+    row["per_node"]["fit_range"] = None
+    assert _fit_range_cell(row) == "[0.5, 1]"

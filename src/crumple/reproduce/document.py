@@ -138,6 +138,19 @@ def _twin_cells(r: dict | None) -> list[str]:
     return [_ours(r), _deviation(r), r["verdict"]]
 
 
+def _fit_range_cell(r: dict) -> str:
+    """The row's fit range, and the per-node one after it where it differs. A row fitted over
+    a window of λ prints the window (the same for every α row); the stages inside it are in
+    results.json's fit_range."""
+    bracket = r.get("bracket", False)
+    pl = _range(r.get("fit_window") or r["fit_range"], bracket)
+    pn = r.get("per_node")
+    if pn is None or r.get("fit_window"):
+        return pl
+    other = _range(pn.get("fit_range"), bracket)
+    return pl if other in (pl, "—") else f"{pl} (per node {other})"
+
+
 def _table(an: Analysis) -> list[tuple]:
     head = [
         *("quantity", "paper", "per length: ours ± σ", "|ours − paper|/σ", "verdict"),
@@ -149,9 +162,7 @@ def _table(an: Analysis) -> list[tuple]:
             f"{r['paper']:g}",
             *_twin_cells(r),
             *_twin_cells(r.get("per_node")),
-            # a row fitted over a window of λ prints the window (the same for every α row);
-            # the stages inside it are in results.json's fit_range
-            _range(r.get("fit_window") or r["fit_range"], r.get("bracket", False)),
+            _fit_range_cell(r),
             r["replicas"]
             + (
                 f" (per node {r['per_node']['replicas']})"

@@ -246,7 +246,7 @@ def _discuss(rec: Record) -> dict[str, str]:
     out["collapse"] = (
         f"R_g ≤ 1/2 for a wire of length 1 while k_b k_s spans {dec:.0f} decades over the six "
         f"points: an exponent of 1.2 would rescale the curves by a factor 10^{1.2 * dec:.1f}. "
-        f"The best exponent, {cc['exponent']:.3f}, lowers the scatter of ln R_g only from "
+        f"The best exponent, {cc['exponent']:.3f}, lowers the scatter of ln R_g from "
         f"{cc['scatter_uncollapsed']:.3f} to {cc['scatter']:.3f} (Fig. 5c)" + _collapse_says(cc)
     )
     ap = ", ".join(
