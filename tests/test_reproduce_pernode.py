@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from crumple import paper
-from crumple.reproduce.fig3_mass_size import _dm_hollow, _inner_start
+from crumple.reproduce.fig3_mass_size import _dm_hollow, _dm_slope, _inner_start, _is_rod
 from crumple.reproduce.series import Series
-from crumple.reproduce.summary import _state
+from crumple.reproduce.summary import _state, tally
 
 
 def _series(keys, *, confinement="per-length", positions=None, n_lam=3):
@@ -121,12 +121,31 @@ def test_every_row_has_a_per_node_verdict_and_the_summary_follows_it(smoke):
             assert cell.startswith(_state(reading))  # the summary's verdict is the row's
         both_agree = _state(r) == _state(r["per_node"]) == "agrees"
         assert (line[3] == "—") == both_agree  # a reason exactly where one reading differs
-    n_pl = sum(_state(r) == "agrees" for r in rows)
-    n_pn = sum(_state(r["per_node"]) == "agrees" for r in rows)
+    g = tally(rows)
     assert (
-        f"Of the paper's {len(rows)} numbers, {n_pl} agree within 2σ under per-length "
-        f"confinement and {n_pn} under per-node" in md
+        f"Of the paper's {len(rows)} numbers, {len(g['both'])} " in md
+        and f"{len(g['per-length'])} only per length" in md
+        and f"{len(g['per-node'])} only per node" in md
+        and f"and {len(g['neither'])} under neither" in md
     )
+
+
+def _r(pl: str, pn: str | None) -> dict:
+    row = {"key": "x", "quantity": "x", "verdict": pl, "ours": 1.0, "sigma": 0.1}
+    return row if pn is None else {**row, "per_node": {**row, "verdict": pn}}
+
+
+def test_the_tally_puts_every_row_in_exactly_one_group():
+    """Every combination of the two readings' states, "not measured" and "not run" included:
+    the four groups partition the rows (B3 of issue 14's review)."""
+    states = ["agrees (within 2σ)", "differs", "not measured", "cannot be fitted (hollow ring)"]
+    rows = [_r(a, b) for a in states for b in [*states, None]]
+    g = tally(rows)
+    assert sum(len(v) for v in g.values()) == len(rows)
+    ids = [id(r) for v in g.values() for r in v]
+    assert len(set(ids)) == len(rows)
+    assert len(g["both"]) == 1 and len(g["per-length"]) == 4 and len(g["per-node"]) == 3
+    assert len(g["neither"]) == len(rows) - 8
 
 
 def test_the_html_report_opens_with_the_summary(smoke):
@@ -165,3 +184,73 @@ def test_a_reproduction_without_the_per_node_runs_says_how_to_add_them(smoke, tm
     (old / "profile.json").write_text(json.dumps(prof))
     with pytest.raises(ValueError, match=r"holds no 'elastic_per_node' runs.*crumple reproduce"):
         analyse(old)
+
+
+def test_a_straight_or_folded_flat_wire_is_a_rod_and_a_ring_is_not():
+    line = np.c_[np.linspace(-0.5, 0.5, 101), np.zeros(101)]
+    hairpin = np.r_[line[:51], line[50:][::-1][1:] + np.array([0.0, 0.01])]  # folded back
+    assert _is_rod(line) and _is_rod(hairpin)
+    assert not _is_rod(_ring())
+
+
+def test_the_saturation_slope_is_fitted_per_point_not_on_a_mean_over_changing_points():
+    """Two points with D_M = c + 0.1 log10 λ, c = 1.5 and 3: the second cannot be fitted at
+    the first half of the stages. A stage-by-stage mean over the points that can be fitted
+    jumps from 1.5 to 2.25 (a slope near 1); per point, then pooled, the slope is 0.1."""
+    lam_n = 8
+    s = _series([(1, 1e4), (5, 5e5)], positions=_ring(), n_lam=lam_n)
+    s.lam[:] = np.geomspace(150.0, 2000.0, lam_n)
+    x = np.log10(s.lam)
+    dm = np.stack([1.5 + 0.1 * x, 3.0 + 0.1 * x])[:, None, :]
+    dm[1, 0, : lam_n // 2] = np.nan
+    est, info = _dm_slope(s, [0, 1], dm)
+    assert est.value == pytest.approx(0.1, abs=1e-9)
+    assert info["points_fitted"] == 2 and info["rod_wires"] == 0
+    naive = np.polyfit(x, np.nanmean(dm[:, 0, :], axis=0), 1)[0]
+    assert naive > 0.5  # the artefact the per-point fit removes
+
+
+def test_a_rod_at_lambda_1000_is_left_out_of_the_saturation_slope():
+    line = np.c_[np.linspace(-0.5, 0.5, 101), np.zeros(101)]
+    s = _series([(1, 1e4)], positions=line, n_lam=5)
+    s.lam[:] = np.geomspace(150.0, 2000.0, 5)
+    dm = np.ones((1, 1, 5))
+    est, info = _dm_slope(s, [0], dm)
+    assert info == {**info, "points_fitted": 0, "rod_wires": 1}
+    assert math.isnan(est.value)
+
+
+def test_the_reason_says_fit_range_only_when_an_alternative_range_agrees():
+    from crumple.reproduce.common import _alt_reason
+
+    def alt(variant, value):
+        return {"variant": variant, "value": value, "sigma": 0.1}
+
+    far = [alt("fit on [0.1, 0.5]", 2.0), alt("R_G = RMS radius", 1.8)]
+    assert _alt_reason(far, 1.33).startswith("no range tried reproduces it (best: R_G = RMS")
+    assert _alt_reason([*far, alt("fit on [0.2, 1]", 1.4)], 1.33).startswith(
+        "fit range: fit on [0.2, 1] gives"
+    )
+    assert _alt_reason([alt("R_G = RMS radius", 1.3)], 1.33).startswith("choice: R_G")
+    assert _alt_reason([], 1.33) == "no range tried can be fitted"
+
+
+def test_the_collapse_sentence_follows_the_scatter():
+    from crumple.reproduce.fig5_radius import _collapse_says
+
+    flat = {"scatter_uncollapsed": 0.30, "scatter": 0.25, "exponent": 0.04}
+    assert "no power of k_b k_s collapses" in _collapse_says(flat)
+    drop = {"scatter_uncollapsed": 0.30, "scatter": 0.10, "exponent": 0.04}
+    assert "does collapse them" in _collapse_says(drop)
+    assert "no power" not in _collapse_says(drop)
+
+
+def test_the_fit_range_column_shows_the_per_node_range_where_it_differs():
+    from crumple.reproduce.document import _fit_range_cell
+
+    row = {"fit_range": [0.5, 1.0], "per_node": {"fit_range": [0.5, 1.0]}}
+    assert _fit_range_cell(row) == "[0.5, 1]"
+    row["per_node"]["fit_range"] = [0.56, 1.0]
+    assert _fit_range_cell(row) == "[0.5, 1] (per node [0.56, 1])"
+    row["per_node"]["fit_range"] = None
+    assert _fit_range_cell(row) == "[0.5, 1]"

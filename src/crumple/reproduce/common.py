@@ -238,6 +238,26 @@ def _alt(quantity: str, variant: str, est: Estimate, replicas: int | str, paper_
     }
 
 
+def _alt_reason(alts: list[dict], paper_value: float, what: str = "range") -> str:
+    """The summary's reason for a value that differs, from its alternatives (``_alt`` dicts):
+    "fit range: <the first that agrees within 2σ> gives …" when one does and it is a fit
+    range ("fit on …"), "choice: …" when it is another reading, else "no <what> tried
+    reproduces it (best: <the one nearest in σ> …)"."""
+    fitted = [a for a in alts if a["value"] is not None and a["sigma"]]
+    if not fitted:
+        return f"no {what} tried can be fitted"
+    dev = [abs(a["value"] - paper_value) / a["sigma"] for a in fitted]
+    ok = [a for a, d in zip(fitted, dev, strict=True) if d <= 2]
+    if ok:
+        label = "fit range" if ok[0]["variant"].startswith("fit on") else "choice"
+        return f"{label}: {ok[0]['variant']} gives {_num(ok[0]['value'], ok[0]['sigma'])}"
+    best = fitted[int(np.argmin(dev))]
+    return (
+        f"no {what} tried reproduces it (best: {best['variant']}, "
+        f"{_num(best['value'], best['sigma'])})"
+    )
+
+
 def _num(v, sig=None) -> str:
     if v is None:
         return "—"
@@ -326,3 +346,23 @@ def _missing_points_ok() -> Iterator[None]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         yield
+
+
+def _both_readings_discussion(one, rec: Record, records=None) -> dict[str, str]:
+    """A section's discussion under both readings: ``one(record)`` (or ``one(record,
+    records)`` when ``records`` is given) per length, then per node after "**Per node:**"
+    (only the per-length text where the per-node one is empty)."""
+    if records is None:
+        pl, pn = one(rec), one(rec.detail["per_node"])
+    else:
+        pl, pn = one(rec, records), one(rec.detail["per_node"], _per_node_records(records))
+    if not pn:
+        return pl
+    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+
+
+def _both_readings_reasons(one, rec: Record) -> dict[str, dict[str, str]]:
+    """The summary's reasons of a section, ``one(record) -> {row key: sentence}``, per
+    reading: ``{row key: {"per-length": …, "per-node": …}}``."""
+    pl, pn = one(rec), one(rec.detail["per_node"])
+    return {k: {"per-length": pl[k], "per-node": pn.get(k, "")} for k in pl}

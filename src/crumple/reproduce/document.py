@@ -117,17 +117,18 @@ def _ours(r: dict) -> str:
     if r.get("bracket") and r["ours"] is not None:
         return f"{r['ours']:g} (bracket {_range(r['fit_range'], True)})"
     hollow = r.get("hollow")
+    rods = f"; {hollow['rods']}/{hollow['of']} wires rods" if hollow and hollow.get("rods") else ""
     if hollow and hollow["wires"]:
         inner = hollow["inner"]
         where = (
-            f"; where the wire has mass, [{inner['fit_range'][0]:.2f}, 1]: "
+            f"; where the wire has mass, {hollow.get('inner_range', '—')}: "
             f"{_num(inner['value'], inner['sigma'])}"
             if inner["value"] is not None
             else ""
         )
         what = _num(r["ours"], r["sigma"]) if r["ours"] is not None else "cannot be fitted"
-        return f"{what} ({hollow['wires']}/{hollow['of']} wires hollow rings{where})"
-    return _num(r["ours"], r["sigma"])
+        return f"{what} ({hollow['wires']}/{hollow['of']} wires hollow rings{where}{rods})"
+    return _num(r["ours"], r["sigma"]) + (f" ({rods[2:]})" if rods else "")
 
 
 def _twin_cells(r: dict | None) -> list[str]:
@@ -135,6 +136,19 @@ def _twin_cells(r: dict | None) -> list[str]:
     if r is None:
         return ["—", "—", "not run"]
     return [_ours(r), _deviation(r), r["verdict"]]
+
+
+def _fit_range_cell(r: dict) -> str:
+    """The row's fit range, and the per-node one after it where it differs. A row fitted over
+    a window of λ prints the window (the same for every α row); the stages inside it are in
+    results.json's fit_range."""
+    bracket = r.get("bracket", False)
+    pl = _range(r.get("fit_window") or r["fit_range"], bracket)
+    pn = r.get("per_node")
+    if pn is None or r.get("fit_window"):
+        return pl
+    other = _range(pn.get("fit_range"), bracket)
+    return pl if other in (pl, "—") else f"{pl} (per node {other})"
 
 
 def _table(an: Analysis) -> list[tuple]:
@@ -148,9 +162,7 @@ def _table(an: Analysis) -> list[tuple]:
             f"{r['paper']:g}",
             *_twin_cells(r),
             *_twin_cells(r.get("per_node")),
-            # a row fitted over a window of λ prints the window (the same for every α row);
-            # the stages inside it are in results.json's fit_range
-            _range(r.get("fit_window") or r["fit_range"], r.get("bracket", False)),
+            _fit_range_cell(r),
             r["replicas"]
             + (
                 f" (per node {r['per_node']['replicas']})"

@@ -17,16 +17,19 @@ import numpy as np
 from .. import paper
 from ..observables import mass_size_exponent, mass_within, r_max
 from .common import (
+    PER_NODE_VARIANT,
     Context,
     Estimate,
     Record,
     _alt,
+    _alt_reason,
+    _both_readings_discussion,
+    _both_readings_reasons,
     _combine,
     _jsonable,
     _linear_slope,
     _missing_points_ok,
     _num,
-    _per_node_records,
     _pool,
     _row,
     _twin,
@@ -60,21 +63,87 @@ def _label(key) -> str:
     return f"k_b={key[0]:g}, k_s={key[1]:g}"
 
 
-def _dm_against_lambda(el: Series, fig3: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Replica mean, sd and count of D_M at every stage of each Fig. 3 point: (point, lam)."""
-    dm_lam = np.full((len(fig3), el.lam.size), np.nan)
-    dm_lam_sd = np.full_like(dm_lam, np.nan)
-    dm_lam_n = np.zeros(dm_lam.shape, int)
+#: A wire is a rod (folded flat onto a line, D_M = 1 whatever the fold) when the smaller
+#: principal axis of its node cloud is below this fraction of the larger (rms widths).
+_ROD_ASPECT = 0.1
+
+
+def _is_rod(x) -> bool:
+    """Whether the wire ``x`` (nodes, shape (n, 2)) lies along a line: the rms width across
+    its principal axis under :data:`_ROD_ASPECT` of the rms width along it."""
+    x = np.asarray(x, float)
+    ev = np.linalg.eigvalsh(np.cov((x - x.mean(axis=0)).T))
+    return bool(ev[1] > 0 and math.sqrt(max(ev[0], 0.0) / ev[1]) < _ROD_ASPECT)
+
+
+def _dm_stages(el: Series, fig3: list[int]) -> np.ndarray:
+    """D_M of every wire at every stage, shape (point, replica, λ); NaN where the wire was
+    not run or cannot be fitted (hollow)."""
+    out = np.full((len(fig3), el.replicas, el.lam.size), np.nan)
     for a, p in enumerate(fig3):
-        for j in range(el.lam.size):
-            vals = [
-                _dm_fit(el.positions[p, r, j])[0] for r in range(el.replicas) if el.valid(p, r, j)
-            ]
-            if vals:
-                dm_lam[a, j] = np.mean(vals)
-                dm_lam_sd[a, j] = np.std(vals)
-                dm_lam_n[a, j] = len(vals)
-    return dm_lam, dm_lam_sd, dm_lam_n
+        for r in range(el.replicas):
+            for j in range(el.lam.size):
+                if el.valid(p, r, j):
+                    out[a, r, j] = _dm_fit(el.positions[p, r, j])[0]
+    return out
+
+
+def _dm_against_lambda(el: Series, fig3: list[int], dm: np.ndarray):
+    """Replica mean, sd and count of D_M at every stage of each point, shape (point, λ); the
+    mean is NaN where some wire of the stage cannot be fitted (a gap in Fig. 3b)."""
+    valid = np.zeros(dm.shape, bool)
+    for a, p in enumerate(fig3):
+        for r in range(el.replicas):
+            valid[a, r] = [el.valid(p, r, j) for j in range(el.lam.size)]
+    n = valid.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.where(valid, dm, 0.0)
+        mean = np.where(n > 0, d.sum(axis=1) / n, np.nan)
+        sd = np.sqrt(np.where(valid, (d - mean[:, None, :]) ** 2, 0.0).sum(axis=1) / n)
+    sd = np.where(n > 0, sd, np.nan)
+    return mean, sd, n
+
+
+def _rods(el: Series, fig3: list[int]) -> list[tuple[int, int]]:
+    """Per point, at λ = 1000: how many of its wires are rods (:func:`_is_rod`), of how many."""
+    j = el.j(LAM_FIG3)
+    out = []
+    for p in fig3:
+        wires = [el.positions[p, r, j] for r in range(el.replicas) if el.valid(p, r, j)]
+        out.append((sum(_is_rod(x) for x in wires), len(wires)))
+    return out
+
+
+def _dm_slope(el: Series, fig3: list[int], dm: np.ndarray) -> tuple[Estimate, dict]:
+    """Slope of D_M against log10 λ over λ ∈ DM_SATURATION_RANGE: fitted per wire over the
+    stages where it can be fitted (at least 3), combined over the replicas of a point
+    (:func:`_combine`) and pooled over the points (:func:`_pool`). A wire that is a rod at
+    λ = 1000 is left out (its D_M = 1 says it is folded flat, not how it fills the plane)."""
+    lo, hi = paper.DM_SATURATION_RANGE
+    sel = (el.lam > lo) & (el.lam <= hi)
+    x = np.log10(el.lam[sel])
+    j3 = el.j(LAM_FIG3)
+    per, rods = [], 0
+    for a, p in enumerate(fig3):
+        vals, errs = [], []
+        for r in range(el.replicas):
+            if el.valid(p, r, j3) and _is_rod(el.positions[p, r, j3]):
+                rods += 1
+                continue
+            v, e = _linear_slope(x, dm[a, r, sel])
+            vals.append(v)
+            errs.append(e)
+        per.append(_combine(vals, errs, (float(el.lam[sel][0]), hi) if sel.any() else None))
+    est = _pool(per, (float(el.lam[sel][0]), hi) if sel.any() else None)
+    info = {
+        "points_fitted": int(sum(e.n > 0 and np.isfinite(e.value) for e in per)),
+        "points": len(fig3),
+        "rod_wires": rods,
+        "per_point": {
+            f"{el.keys[p][0]:g}, {el.keys[p][1]:g}": e for p, e in zip(fig3, per, strict=True)
+        },
+    }
+    return est, info
 
 
 def _mass_curves(el: Series) -> dict:
@@ -109,9 +178,10 @@ def _dm_hollow(el: Series, p: int) -> tuple[int, int, Estimate]:
     """At λ = 1000: how many of the wires of point ``p`` cannot be fitted on the paper's
     range (M(R) = 0 somewhere in it: hollow), of how many, and D_M on the range where each
     wire has mass, [max(0.5, 1.1 ρ), 1] with ρ the R/R_G where its mass starts (a range
-    narrower than a factor 1.25 in R is not fitted)."""
+    narrower than a factor 1.25 in R is not fitted). The estimate's range starts at the
+    smallest start used (each wire is fitted from its own)."""
     j = el.j(LAM_FIG3)
-    hollow, total, vals, errs, lo = 0, 0, [], [], 0.0
+    hollow, total, vals, errs, starts = 0, 0, [], [], []
     for r in range(el.replicas):
         if not el.valid(p, r, j):
             continue
@@ -123,16 +193,17 @@ def _dm_hollow(el: Series, p: int) -> tuple[int, int, Estimate]:
             v, e = _dm_fit(x, fit_range=(start, 1.0))
             vals.append(v)
             errs.append(e)
-            lo = max(lo, start)
-    return hollow, total, _combine(vals, errs, (lo, 1.0) if vals else None)
+            starts.append(start)
+    return hollow, total, _combine(vals, errs, (min(starts), 1.0) if vals else None)
 
 
 def _hollow_info(el: Series, fig3: list[int]) -> dict:
     """Hollow wires over the six points at λ = 1000, and D_M where the wire has mass."""
     per = [_dm_hollow(el, p) for p in fig3]
     inner = _pool([e for _, _, e in per])
-    return {
+    out = {
         "wires": sum(h for h, _, _ in per),
+        "rods": sum(n for n, _ in _rods(el, fig3)),
         "of": sum(t for _, t, _ in per),
         "inner": inner.to_dict(),
         "inner_points": {
@@ -140,12 +211,24 @@ def _hollow_info(el: Series, fig3: list[int]) -> dict:
             for p, (h, t, e) in zip(fig3, per, strict=True)
         },
     }
+    out["inner_range"] = _inner_range(_jsonable(out))
+    return out
+
+
+def _inner_range(h: dict) -> str:
+    """The ranges "where the wire has mass" actually fitted: [a, 1], or [a-b, 1] when the
+    wires start at different R/R_G."""
+    starts = [e["fit_range"][0] for e in h["inner_points"].values() if e["fit_range"]]
+    if not starts:
+        return "—"
+    lo, hi = min(starts), max(starts)
+    return f"[{lo:.2f}, 1]" if round(lo, 2) == round(hi, 2) else f"[{lo:.2f}…{hi:.2f}, 1]"
 
 
 def _hollow_note(h: dict) -> str:
     inner = h["inner"]
     where = (
-        f"; where the wire has mass, R/R_G ∈ [{inner['fit_range'][0]:.2f}, 1]: D_M = "
+        f"; where the wire has mass, R/R_G ∈ {_inner_range(h)}: D_M = "
         f"{_num(inner['value'], inner['sigma'])}"
         if inner["value"] is not None
         else "; no range of R where the wire has mass spans a factor 1.25"
@@ -162,10 +245,14 @@ def _measure(el: Series, nrep: int) -> Record:
     dm_points = {tuple(el.keys[p]): _dm(el, p) for p in fig3}
     dm = _pool(list(dm_points.values()), paper.DM_RANGE)
     hollow = _hollow_info(el, fig3)
-    note = "mean over the six (k_b, k_s)"
+    note = f"mean over {dm.n} of the {len(fig3)} (k_b, k_s) that can be fitted"
     if hollow["wires"]:
         note += "; " + _hollow_note(hollow)
-    rows = [{**_row("D_M", dm, f"{nrep} × 6 points", note), "hollow": hollow}]
+    if hollow["rods"]:
+        note += (f"; rods at λ = 1000 (folded flat onto a line: D_M = 1 whatever the folding): "
+                 f"{hollow['rods']} of {hollow['of']} wires")  # fmt: skip
+    rows = [{**_row("D_M", dm, f"{nrep} × {dm.n} of {len(fig3)} points", note),
+             "hollow": hollow}]  # fmt: skip
     if not np.isfinite(dm.value) and hollow["wires"]:
         rows[0]["verdict"] = "cannot be fitted (hollow ring)"
     alts = [_alt(_QUANTITY, "default: R_G = r_max, exact M(R), [0.5, 1]", dm, nrep, 1.33)]
@@ -187,7 +274,8 @@ def _measure(el: Series, nrep: int) -> Record:
         for r in range(el.replicas)
         if el.valid(p, r, j3)
     ]
-    dm_lam, dm_lam_sd, dm_lam_n = _dm_against_lambda(el, fig3)
+    dm_all = _dm_stages(el, fig3)
+    dm_lam, dm_lam_sd, dm_lam_n = _dm_against_lambda(el, fig3, dm_all)
     extra = {
         "D_M_points": {f"{k[0]:g}, {k[1]:g}": v for k, v in dm_points.items()},
         "D_M_hollow": hollow,
@@ -201,24 +289,32 @@ def _measure(el: Series, nrep: int) -> Record:
             "n": dm_lam_n,
         },
     }
-    lo, hi = paper.DM_SATURATION_RANGE
-    sel = (el.lam > lo) & (el.lam <= hi)
-    y = _nanmean(dm_lam[:, sel], axis=0)
-    slope, slope_err = _linear_slope(np.log10(el.lam[sel]), y)
-    rows.append(
-        _row(
-            "D_M_slope",
-            Estimate(slope, slope_err, int(sel.sum()), (float(el.lam[sel][0]), hi)),
-            f"{nrep} × 6 points",
-            "slope of the six-point mean D_M(λ) against log10 λ (0 = saturated)",
-        )
-    )
+    rows.append(_slope_row(el, fig3, dm_all, nrep, extra))
     return Record(
         rows=tuple(rows),
         alternatives=tuple(alts),
         extra=extra,
         detail={"curves": _mass_curves(el)},
     )
+
+
+def _slope_row(el: Series, fig3: list[int], dm_all: np.ndarray, nrep: int, extra: dict):
+    """The row ``D_M_slope`` (:func:`_dm_slope`); its per-point slopes go to ``extra``."""
+    slope, info = _dm_slope(el, fig3, dm_all)
+    extra["D_M_slope"] = info
+    rods = (
+        f"; {info['rod_wires']} wire(s) left out: rods at λ = 1000 (folded flat, D_M = 1)"
+        if info["rod_wires"]
+        else ""
+    )
+    row = _row(
+        "D_M_slope",
+        slope,
+        f"{nrep} × {info['points_fitted']} of {info['points']} points",
+        "slope of D_M against log10 λ, fitted per wire over the stages where it can be fitted, "
+        f"pooled over {info['points_fitted']} of {info['points']} points (0 = saturated){rods}",
+    )
+    return {**row, "points_fitted": [info["points_fitted"], info["points"]]}
 
 
 def _nanmean(a, axis=None):
@@ -258,14 +354,23 @@ def draw(rec: Record) -> dict:
     }
 
 
-def _fmt(v, spec: str = ".2f") -> str:
-    return "— (not fitted)" if v is None or not np.isfinite(v) else format(v, spec)
+def _point_dm(e: dict, h: dict | None) -> str:
+    """D_M of one point for the per-point list, or why there is none (``h``: its hollow
+    count at λ = 1000)."""
+    if e["value"] is not None:
+        return f"{e['value']:.2f}"
+    if h is None or h["of"] == 0:
+        return "not run"
+    return "cannot be fitted (hollow ring)" if h["hollow"] else "cannot be fitted"
 
 
 def _discuss(rec: Record) -> dict[str, str]:
     """Why D_M differs (or not) under one reading, from the numbers of its record."""
     ex = rec.extra
-    pts = ", ".join(f"({k}) {_fmt(e['value'])}" for k, e in _jsonable(ex["D_M_points"]).items())
+    hp = _jsonable(ex["D_M_hollow"])["inner_points"]
+    pts = ", ".join(
+        f"({k}) {_point_dm(e, hp.get(k))}" for k, e in _jsonable(ex["D_M_points"]).items()
+    )
     dm_alts = [
         a
         for a in rec.alternatives
@@ -297,59 +402,59 @@ def _discuss(rec: Record) -> dict[str, str]:
         f"{ex['r_max_1000']:.2f} has barely a decade between its segment length and its size "
         "in which a fractal dimension could be measured."
     )
-    slope = (
-        "D_M(λ) is not constant above λ = 100 (Fig. 3b): it jumps between stages as loops "
-        "form and zip; a slope within 2σ of 0 would mean saturation."
-    )
-    return {"D_M": dm, "D_M_slope": slope}
+    row = next(r for r in rec.rows if r["key"] == "D_M_slope")
+    return {"D_M": dm, "D_M_slope": _slope_text(row, _jsonable(ex["D_M_slope"]))}
 
 
 def discuss(rec: Record, records) -> dict[str, str]:
     """Why D_M differs (or not), per length and per node, from the numbers of the record."""
-    pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
-    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+    return _both_readings_discussion(_discuss, rec)
+
+
+def _slope_text(row: dict, info: dict) -> str:
+    """What the slope of D_M(λ) says, from its verdict (the discussion's sentence)."""
+    n = f"{info['points_fitted']} of {info['points']} points"
+    per = ", ".join(f"({k}) {_num(e['value'], e['sigma'])}" for k, e in info["per_point"].items())
+    rods = f"; {info['rod_wires']} rod wire(s) left out" if info["rod_wires"] else ""
+    head = (
+        f"Slope of D_M against log10 λ above λ = 100, fitted per wire and pooled over {n}{rods}: "
+        f"{_num(row['ours'], row['sigma'])} per decade (per point: {per}). "
+    )
+    if row["ours"] is None:
+        return head + "No wire has three stages where D_M can be fitted: saturation not measured."
+    if row["verdict"].startswith("agrees"):
+        return head + "Within 2σ of 0: D_M(λ) is constant within the noise above λ = 100."
+    return head + (
+        "Not within 2σ of 0: D_M(λ) still changes above λ = 100 (Fig. 3b), as loops form and zip."
+    )
 
 
 def _reason(rec: Record) -> dict[str, str]:
-    """Why D_M and its saturation differ under one reading: one sentence each, from the
-    numbers of its record."""
+    """Why D_M and its saturation differ under one reading: a cause and one number each,
+    from its record (the details are in :func:`_discuss`)."""
     ex = _jsonable(rec.extra)
     h = ex["D_M_hollow"]
-    inner = next((a for a in rec.alternatives if a["variant"].startswith("fit on R/R_G in")), None)
     if h["wires"] and h["wires"] == h["of"]:
-        where = h["inner"]
-        dm = (
-            f"shape: all {h['of']} wires coil into hollow rings (M(R) = 0 in the fit window), "
-            "so D_M cannot be fitted"
-            + (
-                f"; where the wire has mass it is {_num(where['value'], where['sigma'])}"
-                if where["value"] is not None
-                else ""
-            )
-        )
+        dm = f"shape: all {h['of']} wires are hollow rings, D_M cannot be fitted"
     elif ex["D_M_points"] and all(v["value"] is None for v in ex["D_M_points"].values()):
-        dm = "no wire of this profile's points could be fitted"
+        dm = "not fitted: no wire of this profile's points can be fitted"
     else:
-        mh = ex.get("M_at_half_RG") or [math.nan, math.nan]
-        dm = (
-            f"fit range: on R/R_G ∈ [0.5, 1] the disc sweeps the outer loops (M(R_G/2) = "
-            f"{mh[0]:.2f}-{mh[1]:.2f} of the mass), a steep climb"
-            + (
-                f"; the inner range [0.1, 0.5] gives {_num(inner['value'], inner['sigma'])}"
-                if inner is not None and inner["value"] is not None
-                else ""
-            )
-            + (f"; {h['wires']} of {h['of']} wires are hollow rings" if h["wires"] else "")
-        )
-    slope = next(r for r in rec.rows if r["key"] == "D_M_slope")
+        alts = [
+            a
+            for a in rec.alternatives
+            if a["quantity"] == _QUANTITY
+            and not a["variant"].startswith(("default", PER_NODE_VARIANT))
+        ]
+        dm = _alt_reason(alts, 1.33, "range or reading")
+    row = next(r for r in rec.rows if r["key"] == "D_M_slope")
+    info = ex["D_M_slope"]
     sat = (
-        f"size: D_M(λ) jumps between stages as loops form and zip (slope "
-        f"{_num(slope['ours'], slope['sigma'])} per decade of λ)"
+        f"not saturated: D_M changes by {_num(row['ours'], row['sigma'])} per decade of λ "
+        f"({info['points_fitted']} of {info['points']} points)"
     )
     return {"D_M": dm, "D_M_slope": sat}
 
 
 def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
     """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
-    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
-    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}
+    return _both_readings_reasons(_reason, rec)

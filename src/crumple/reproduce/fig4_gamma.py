@@ -21,16 +21,19 @@ from .. import paper
 from ..fit import fit_multi_power_law
 from ..theory import gamma_exponents, gamma_prediction
 from .common import (
+    PER_NODE_VARIANT,
     Context,
     Estimate,
     Record,
     _alt,
+    _alt_reason,
+    _both_readings_discussion,
+    _both_readings_reasons,
     _fit_log_prefactor,
     _fit_replicas,
     _jsonable,
     _missing_points_ok,
     _num,
-    _per_node_records,
     _pool,
     _row,
     _twin,
@@ -348,7 +351,16 @@ def _subset_sentence(alts) -> str:
 def _soft_text(ex) -> str:
     rods = ex.get("straight_rods", {})
     lr = ex.get("length_ratio_1000", {})
-    soft = ", ".join(f"({k}) {v:.2f}" for k, v in lr.items() if k.endswith(", 2000"))
+    soft = ", ".join(
+        f"({k}) {v:.2f}"
+        for k, v in lr.items()
+        if k.endswith(", 2000") and v is not None and np.isfinite(v)
+    )
+    if not soft:
+        return (
+            "At k_s = 2e3 (the modulus of Fig. 4a and 4c) no wire was run under this reading "
+            "at this profile's points, so its compression is not measured."
+        )
     rod_text = (
         "; ".join(
             f"({k}) from λ = {v['from_lam']:g}, L/L0 = {v['length_ratio']:.3f}"
@@ -367,8 +379,7 @@ def _soft_text(ex) -> str:
 
 def discuss(rec: Record, records) -> dict[str, str]:
     """Why the exponents of γ differ, per length and per node, from the numbers of the record."""
-    pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
-    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+    return _both_readings_discussion(_discuss, rec)
 
 
 def _discuss(rec: Record) -> dict[str, str]:
@@ -425,49 +436,28 @@ def _discuss(rec: Record) -> dict[str, str]:
 
 
 def _reason(rec: Record) -> dict[str, str]:
-    """Why the exponents of γ differ under one reading: one sentence each, from its record."""
+    """Why the exponents of γ differ under one reading: a cause and one number each, from
+    the alternatives of its record (the details are in :func:`_discuss`)."""
     ex = _jsonable(rec.extra)
-    curves = [v["value"] for v in ex["eps_curves"]["eps_l"].values() if v["value"] is not None]
-    spread = (
-        f"the {len(curves)} γ(λ) curves give {min(curves):.2f} to {max(curves):.2f}"
-        if curves
-        else "no γ(λ) curve could be fitted"
-    )
-    eps_l = f"fit range: over λ ∈ [500, 2000] {spread}"
-    lr = [v for k, v in ex["length_ratio_1000"].items() if k.endswith(", 2000") and v is not None]
-    t1 = {a["quantity"]: a for a in rec.alternatives if a["variant"].startswith("Table 1")}
-    th = ex["gamma_formula_exponents"]
-
-    def other(q, key):
-        a = t1.get(q)
-        got = "" if a is None or a["value"] is None else f" gives {_num(a['value'], a['sigma'])}"
-        return (
-            f"fit range: at k_s = 2e3 (below Table 1's range) the wire is compressed to "
-            f"L/L0 = {min(lr):.2f}-{max(lr):.2f} at λ = 1000; Table 1's range (k_s ≥ 1e4){got}"
-            f", the paper's closed form {th[key]:.2f}"
-            if lr and th.get(key) is not None
-            else "not measured at this profile's points"
-        )
-
-    out = {"eps_l": eps_l, "eps_l_theory": eps_l, "eps_b": other("ε_b", "eps_b"),
-           "eps_s": other("ε_s", "eps_s")}  # fmt: skip
+    own = [a for a in rec.alternatives if not a["variant"].startswith(PER_NODE_VARIANT)]
+    out = {}
+    for key, q in (("eps_l", "ε_l"), ("eps_l_theory", "ε_l"), ("eps_b", "ε_b"), ("eps_s", "ε_s")):
+        row = next(r for r in rec.rows if r["key"] == key)
+        out[key] = _alt_reason([a for a in own if a["quantity"] == q], row["paper"], "fit")
     rods = ex["straight_rods"]
     for key, pts in (("eps_b", paper.FIG4A_POINTS), ("eps_s", paper.FIG4B_POINTS)):
         row = next(r for r in rec.rows if r["key"] == key)
-        flat = [rods[f"{k[0]:g}, {k[1]:g}"] for k in pts if f"{k[0]:g}, {k[1]:g}" in rods]
-        if row["ours"] is None:  # nothing fitted: why
-            out[key] = "no curve of this panel could be fitted at this profile's points"
-        if row["ours"] is None and flat:  # γ undefined on rods: no curve to fit
+        flat = [k for k in pts if f"{k[0]:g}, {k[1]:g}" in rods]
+        if row["ours"] is None:
             out[key] = (
-                f"collapse: {len(flat)} of the {len(pts)} wires of this panel collapse into "
-                f"straight rods (L/L0 down to {min(v['length_ratio'] for v in flat):.3f}) from "
-                f"λ = {min(v['from_lam'] for v in flat):.3g}, where γ is undefined, so no "
-                "curve can be fitted"
+                f"collapse: {len(flat)} of the {len(pts)} wires of this panel fold into straight "
+                "rods, where γ is undefined"
+                if flat
+                else "no curve of this panel can be fitted at this profile's points"
             )
     return out
 
 
 def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
     """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
-    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
-    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}
+    return _both_readings_reasons(_reason, rec)

@@ -9,25 +9,34 @@ independent of k_b and k_s". Says: rows ``alpha`` and ``collapse``, one claim.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import paper
 from ..fit import collapse, fit_power_law
 from .common import (
+    PER_NODE_VARIANT,
     Context,
     Estimate,
     Record,
     _alt,
+    _alt_reason,
+    _both_readings_discussion,
+    _both_readings_reasons,
     _fit_log_prefactor,
     _jsonable,
     _missing_points_ok,
-    _per_node_records,
     _pool,
     _row,
     _twin,
 )
 from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import Series, _alpha, _local_slopes
+
+#: A best collapse exponent that lowers the scatter of ln R_g by less than this factor does
+#: not collapse the curves.
+_COLLAPSE_GAIN = 2.0
 
 NAME = "fig5_radius"
 READS = (ELASTIC, ELASTIC_PER_NODE)
@@ -209,13 +218,26 @@ def _draw(rec: Record):
 
 def discuss(rec: Record, records) -> dict[str, str]:
     """Why the collapse fails and why α depends on the range fitted, per length and per node."""
-    pl, pn = _discuss(rec), _discuss(_per_node_records({NAME: rec})[NAME])
-    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+    return _both_readings_discussion(_discuss, rec)
+
+
+def _collapse_says(cc: dict) -> str:
+    """What the scatter before and after the best collapse says (:data:`_COLLAPSE_GAIN`)."""
+    before, after = cc.get("scatter_uncollapsed"), cc.get("scatter")
+    if before is None or after is None or not (np.isfinite(before) and np.isfinite(after)):
+        return ": the collapse could not be measured."
+    gain = before / after if after > 0 else math.inf
+    if gain < _COLLAPSE_GAIN:
+        return f", a factor {gain:.2g}: no power of k_b k_s collapses these curves."
+    return (
+        f", a factor {gain:.2g}: a power of k_b k_s does collapse them, at an exponent far "
+        "from the paper's 1.2."
+        if abs(cc["exponent"] - 1.2) > 0.5
+        else f", a factor {gain:.2g}: the curves collapse."
+    )
 
 
 def _discuss(rec: Record) -> dict[str, str]:
-    import math
-
     ex = rec.extra
     g = [k[0] * k[1] for k in paper.FIG3_POINTS]
     dec = math.log10(max(g) / min(g))
@@ -224,9 +246,8 @@ def _discuss(rec: Record) -> dict[str, str]:
     out["collapse"] = (
         f"R_g ≤ 1/2 for a wire of length 1 while k_b k_s spans {dec:.0f} decades over the six "
         f"points: an exponent of 1.2 would rescale the curves by a factor 10^{1.2 * dec:.1f}. "
-        f"The best exponent, {cc['exponent']:.3f}, lowers the scatter of ln R_g only from "
-        f"{cc['scatter_uncollapsed']:.3f} to {cc['scatter']:.3f} (Fig. 5c): no power of "
-        "k_b k_s collapses these curves."
+        f"The best exponent, {cc['exponent']:.3f}, lowers the scatter of ln R_g from "
+        f"{cc['scatter_uncollapsed']:.3f} to {cc['scatter']:.3f} (Fig. 5c)" + _collapse_says(cc)
     )
     ap = ", ".join(
         f"({k}) {'—' if e['value'] is None else format(e['value'], '.3f')}"
@@ -247,27 +268,19 @@ def _discuss(rec: Record) -> dict[str, str]:
 
 
 def _reason(rec: Record) -> dict[str, str]:
-    """Why α and the collapse differ under one reading: one sentence each, from its record."""
-    import math
-
-    ex = _jsonable(rec.extra)
-    ls = ex.get("local_slopes_in_range")
-    claim = rec.claims[0]
-    alpha = (
-        "fit range: R_g drops in steps as loops form and zip"
-        + (f" (local exponent {ls[0]:.2f} to {ls[1]:.2f} in [100, 2000])" if ls else "")
-        + f", and α depends on the point (independence: {claim['verdict']})"
-    )
-    g = [k[0] * k[1] for k in paper.FIG3_POINTS]
-    c = ex["collapse"]["exponent"]
-    coll = (
-        f"size: R_g ≤ 1/2 while k_b k_s spans {math.log10(max(g) / min(g)):.0f} decades; the "
-        "best exponent is " + ("—" if c is None else f"{c:.3f}")
-    )
-    return {"alpha": alpha, "collapse": coll}
+    """Why α and the collapse differ under one reading: a cause and one number each, from
+    its record (the details are in :func:`_discuss`)."""
+    alts = [
+        a
+        for a in rec.alternatives
+        if a["quantity"] == "α, six points"
+        and not a["variant"].startswith(("default", PER_NODE_VARIANT))
+    ]
+    c = _jsonable(rec.extra)["collapse"]["exponent"]
+    coll = "size: the best exponent is " + ("—" if c is None else f"{c:.2f}")
+    return {"alpha": _alt_reason(alts, -0.25, "R_g"), "collapse": coll}
 
 
 def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
     """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
-    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
-    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}
+    return _both_readings_reasons(_reason, rec)

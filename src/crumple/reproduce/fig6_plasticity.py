@@ -19,9 +19,10 @@ from .common import (
     Context,
     Estimate,
     Record,
+    _both_readings_discussion,
+    _both_readings_reasons,
     _jsonable,
     _missing_points_ok,
-    _per_node_records,
     _row,
     _trend,
     _trend_verdict,
@@ -196,9 +197,7 @@ def _draw(rec: Record):
 def discuss(rec: Record, records) -> dict[str, str]:
     """θ_p is ours: how many joints are plastic, against the elastic α; per length and per
     node."""
-    pl = _discuss(rec, records)
-    pn = _discuss(rec.detail["per_node"], _per_node_records(records))
-    return {k: f"{pl[k]} **Per node:** {pn[k]}" for k in pl}
+    return _both_readings_discussion(_discuss, rec, records)
 
 
 def _discuss(rec: Record, records) -> dict[str, str]:
@@ -228,14 +227,13 @@ def _reason(rec: Record) -> dict[str, str]:
     record (θ_p is ours, and where few joints yield α is the elastic one)."""
     ex = rec.extra
     reach = ex["plastic_fraction_beyond_theta_p"]
-    el = rec.detail["elastic_alpha"]
     out = {}
     for key, s_val in (("alpha_s0.05", 0.05), ("alpha_s0.2", 0.2), ("alpha_s0.4", 0.4)):
         k = f"s={s_val:g}, theta_p={paper.PLASTIC_THETA_P:g}"
         fr = reach.get(k, math.nan)
         out[key] = (
             f"choice: θ_p = {paper.PLASTIC_THETA_P:g} rad is ours ({100 * fr:.0f} % of joints "
-            f"plastic); the elastic wire gives α = {el.value:.3f}"
+            "plastic)"
         )
     sat = next(r for r in rec.rows if r["key"] == "alpha_saturation")
     for r in rec.rows:
@@ -243,9 +241,8 @@ def _reason(rec: Record) -> dict[str, str]:
             out[r["key"]] = "not run at this profile's points"
     top = max((k for k in reach if k.startswith("s=0.4,")), key=lambda k: float(k.split("=")[-1]))
     out["alpha_saturation"] = (
-        f"choice: θ_p is ours; at the largest, θ_p = {top.split('=')[-1]} rad, "
-        f"{100 * reach[top]:.0f} % of joints are plastic, and the elastic wire gives "
-        f"|α| = {abs(el.value):.3f}"
+        f"choice: θ_p is ours ({100 * reach[top]:.0f} % of joints plastic at the largest, "
+        f"{top.split('=')[-1]} rad)"
         if sat["ours"] is not None
         else "not run at this profile's points"
     )
@@ -254,5 +251,4 @@ def _reason(rec: Record) -> dict[str, str]:
 
 def summarise(rec: Record, records) -> dict[str, dict[str, str]]:
     """The summary's reason for each row, per reading (``per-length``, ``per-node``)."""
-    pl, pn = _reason(rec), _reason(rec.detail["per_node"])
-    return {k: {"per-length": pl[k], "per-node": pn[k]} for k in pl}
+    return _both_readings_reasons(_reason, rec)

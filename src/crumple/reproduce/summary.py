@@ -12,27 +12,35 @@ from __future__ import annotations
 from .analysis import Analysis
 from .common import _num
 
-__all__ = ["summary_blocks"]
+__all__ = ["summary_blocks", "tally"]
 
 #: The readings of Eq. (1), as the rows store them: the row itself, and ``row["per_node"]``.
 READINGS = ("per-length", "per-node")
-#: Short names of the paper's numbers for the summary (a row of an added study falls back to
-#: its quantity).
+#: Short names of the paper's numbers for the summary, ``{v}`` the paper's value as its row
+#: states it (a row of an added study falls back to its quantity).
 _SHORT = {
-    "D_M": "D_M = 1.33 (Fig. 3)",
+    "D_M": "D_M = {v:g} (Fig. 3)",
     "D_M_slope": "D_M saturates above λ = 100",
-    "eps_l": "ε_l = 0.55 (Fig. 4)",
-    "eps_l_theory": "ε_l = 0.5 (the paper's argument)",
-    "eps_b": "ε_b = 2.6",
-    "eps_s": "ε_s = -3.3",
-    "collapse": "collapse R_g ~ (k_b k_s)^1.2",
-    "alpha": "α = -0.25 (Fig. 5)",
-    "alpha_s0.05": "α = -0.29 at s = 0.05 (Fig. 6)",
-    "alpha_s0.2": "α = -0.24 at s = 0.2",
-    "alpha_s0.4": "α = -0.21 at s = 0.4",
-    "alpha_saturation": "|α| saturates at 0.26",
-    "lambda_contact": "contacts begin at λ ≈ 1000 (Fig. 2)",
+    "eps_l": "ε_l = {v:g} (Fig. 4)",
+    "eps_l_theory": "ε_l = {v:g} (the paper's argument)",
+    "eps_b": "ε_b = {v:g}",
+    "eps_s": "ε_s = {v:g}",
+    "collapse": "collapse R_g ~ (k_b k_s)^{v:g}",
+    "alpha": "α = {v:g} (Fig. 5)",
+    "alpha_s0.05": "α = {v:g} at s = 0.05 (Fig. 6)",
+    "alpha_s0.2": "α = {v:g} at s = 0.2",
+    "alpha_s0.4": "α = {v:g} at s = 0.4",
+    "alpha_saturation": "|α| saturates at {v:g}",
+    "lambda_contact": "contacts begin at λ ≈ {v:g} (Fig. 2)",
 }
+
+
+def _short(r: dict) -> str:
+    """The summary's name of row ``r``, with the paper's value from the row."""
+    fmt = _SHORT.get(r["key"])
+    return r["quantity"] if fmt is None else fmt.format(v=r["paper"])
+
+
 #: The experiments of each reading (their convergence is the "unconverged minimiser" check).
 _EXPERIMENTS = {
     "per-length": ("elastic", "plastic"),
@@ -85,10 +93,8 @@ def _why(r: dict, reasons: dict[str, str]) -> str:
             continue
         other = READINGS[1 - READINGS.index(reading)]
         text = reasons.get(reading, "")
-        if states[other] == "agrees":
-            text = f"normalisation: it agrees {other.replace('-', ' ')}" + (
-                f"; {text}" if text else ""
-            )
+        if states[other] == "agrees":  # the reading is the cause; the section's detail below
+            text = f"normalisation: it agrees {other.replace('-', ' ')}"
         parts.append(f"{reading.replace('-', ' ')}: {text or states[reading]}")
     return "; ".join(parts) + "." if parts else "—"
 
@@ -103,41 +109,89 @@ def _converged(an: Analysis, reading: str) -> tuple[int, int]:
 
 
 def _names(rows: list[dict]) -> str:
-    return ", ".join(_SHORT.get(r["key"], r["quantity"]) for r in rows) or "none"
+    return ", ".join(_short(r) for r in rows) or "none"
+
+
+def tally(rows: list[dict]) -> dict[str, list[dict]]:
+    """Every row in exactly one group: ``both`` (agrees under both readings), ``per-length``
+    or ``per-node`` (agrees only under that one), ``neither`` (agrees under no reading: it
+    differs, or is not measured or not run, under each)."""
+    out: dict[str, list[dict]] = {"both": [], "per-length": [], "per-node": [], "neither": []}
+    for r in rows:
+        pl, pn = _state(r) == "agrees", _state(r.get("per_node")) == "agrees"
+        group = "both" if pl and pn else "per-length" if pl else "per-node" if pn else "neither"
+        out[group].append(r)
+    return out
+
+
+def _unmeasured(rows: list[dict]) -> str:
+    """How many of ``rows`` lack a value under some reading (they count as not agreeing)."""
+    n = sum(
+        _state(r) not in ("agrees", "differs")
+        or _state(r.get("per_node")) not in ("agrees", "differs")
+        for r in rows
+    )
+    return f" ({n} of them not measured under one reading or both)" if n else ""
+
+
+def _powell(an: Analysis) -> str:
+    """What the Powell study found, from its rows when this run has them."""
+    rec = an.records.get("powell_paper")
+    rows = [r for r in (rec.rows if rec is not None else ()) if r["ours"] is not None]
+    if not rows:
+        return (
+            "Whether the paper's numbers are those of unconverged Powell states is a separate "
+            "study (`crumple reproduce --profile powell`, docs/reproduction.md, \"The paper's "
+            'minimiser, given a fair chance").'
+        )
+    ok = [r for r in rows if _state(r) == "agrees"]
+    return (
+        f"The Powell study (the Fig. 2 wire minimised with Powell, per length only) agrees "
+        f"with the paper in {len(ok)} of its {len(rows)} measured values"
+        + (f" ({', '.join(r['quantity'] for r in ok)})" if ok else "")
+        + "."
+    )
 
 
 def _conclusions(an: Analysis) -> str:
     """Three or four sentences, each from the counts of the table above it."""
     rows = an.rows
-    st = [(_state(r), _state(r.get("per_node"))) for r in rows]
-    n = len(rows)
-    a_pl = sum(a == "agrees" for a, _ in st)
-    a_pn = sum(b == "agrees" for _, b in st)
-    both = [r for r, (a, b) in zip(rows, st, strict=True) if a == b == "agrees"]
-    only_pn = [r for r, (a, b) in zip(rows, st, strict=True) if b == "agrees" != a]
-    only_pl = [r for r, (a, b) in zip(rows, st, strict=True) if a == "agrees" != b]
-    neither = [r for r, (a, b) in zip(rows, st, strict=True) if a == "differs" and b == "differs"]
+    g = tally(rows)
     out = [
-        f"Of the paper's {n} numbers, {a_pl} agree within 2σ under per-length confinement "
-        f"and {a_pn} under per-node confinement (Eq. 1 as printed); {len(both)} "
-        f"{'agrees' if len(both) == 1 else 'agree'} under both ({_names(both)}) and "
-        f"{len(neither)} under neither."
+        f"Of the paper's {len(rows)} numbers, {len(g['both'])} "
+        f"{'is' if len(g['both']) == 1 else 'are'} reproduced under both readings of Eq. 1 "
+        f"({_names(g['both'])}), {len(g['per-length'])} only per length "
+        f"({_names(g['per-length'])}), {len(g['per-node'])} only per node "
+        f"({_names(g['per-node'])}), and {len(g['neither'])} under neither"
+        f"{_unmeasured(g['neither'])}: {_names(g['neither'])}."
     ]
-    out.append(f"Only per node reproduces: {_names(only_pn)}; only per length: {_names(only_pl)}.")
-    out.append(f"Neither reading reproduces: {_names(neither)}.")
+    better = (
+        "per length reproduces more of them"
+        if len(g["per-length"]) > len(g["per-node"])
+        else "per node reproduces more of them"
+        if len(g["per-node"]) > len(g["per-length"])
+        else "neither reading reproduces more of them than the other"
+    )
+    if g["neither"]:
+        out.append(
+            "The reading of Eq. 1 alone does not explain the paper's numbers (some agree under "
+            f"neither); {better}."
+        )
+    else:
+        out.append(f"Every number agrees under at least one reading; {better}.")
     counts = {k: _converged(an, k) for k in READINGS}
+    done = ", ".join(f"{c}/{t} {k.replace('-', ' ')}" for k, (c, t) in counts.items())
     if all(c == t for c, t in counts.values()):
         out.append(
-            "Every Newton stage of both readings reached equilibrium ("
-            + ", ".join(f"{c}/{t} {k.replace('-', ' ')}" for k, (c, t) in counts.items())
-            + "), so no difference comes from an unconverged minimiser."
+            f"Every Newton stage of both readings reached equilibrium ({done}), so no "
+            "difference comes from an unconverged minimiser."
         )
     else:
         out.append(
-            "Not every Newton stage reached equilibrium ("
-            + ", ".join(f"{c}/{t} {k.replace('-', ' ')}" for k, (c, t) in counts.items())
-            + "): the rows of those experiments may hold unconverged states (Runs below)."
+            f"Not every Newton stage reached equilibrium ({done}): the rows of those "
+            "experiments may hold unconverged states (Runs below)."
         )
+    out.append(_powell(an))
     return " ".join(out)
 
 
@@ -146,7 +200,7 @@ def summary_blocks(an: Analysis) -> list[tuple]:
     reasons = _reasons(an)
     body = [
         [
-            _SHORT.get(r["key"], r["quantity"]),
+            _short(r),
             _cell(r),
             _cell(r.get("per_node")),
             _why(r, reasons.get(r["key"], {})),
