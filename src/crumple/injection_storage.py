@@ -29,7 +29,6 @@ atomic_path`).
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 import math
 from pathlib import Path
@@ -42,7 +41,7 @@ from .injection import Injection, InjectionResult, InjectionStage
 from .injection_observables import INJECTION_OBSERVABLES, measure_injection
 from .minimize import MinimizeResult
 from .model import Wire
-from .storage import _jsonable_seed, atomic_path, versions
+from .storage import atomic_path, write_run_attrs
 
 __all__ = [
     "FORMAT",
@@ -116,13 +115,7 @@ def save_injections(path, results: list[InjectionResult], *, seed=None,
     path = Path(path)
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, protocol="injection")
-        f.attrs["wire"] = json.dumps(wire.to_dict())
-        f.attrs["injection"] = json.dumps(inj.to_dict())
-        f.attrs["seed"] = json.dumps(_jsonable_seed(seed))
-        f.attrs["versions"] = json.dumps(versions())
-        f.attrs["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-        for k, v in (attrs or {}).items():
-            f.attrs[k] = json.dumps(v)
+        write_run_attrs(f, wire=wire, seed=seed, attrs=attrs, injection=inj.to_dict())
         f.create_dataset("injected_length", data=lengths)
         f.create_dataset("initial", data=np.array([r.initial for r in results]))
         f.create_dataset("n_stages", data=np.array([len(r.stages) for r in results]))

@@ -98,6 +98,20 @@ def versions() -> dict[str, str]:
     }
 
 
+def write_run_attrs(f, *, wire: Wire, seed, attrs=None, **protocol) -> None:
+    """The attributes every run file carries: the wire, the protocol (``ramp=`` or
+    ``injection=``, a dict), the seed, the versions, the time of writing, and ``attrs`` (each
+    JSON-encoded)."""
+    f.attrs["wire"] = json.dumps(wire.to_dict())
+    for k, v in protocol.items():
+        f.attrs[k] = json.dumps(v)
+    f.attrs["seed"] = json.dumps(_jsonable_seed(seed))
+    f.attrs["versions"] = json.dumps(versions())
+    f.attrs["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+    for k, v in (attrs or {}).items():
+        f.attrs[k] = json.dumps(v)
+
+
 def _jsonable_seed(seed):
     if seed is None or isinstance(seed, int | str):
         return seed
@@ -164,13 +178,7 @@ def save_ramps(
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = FORMAT
             f.attrs["format_version"] = FORMAT_VERSION
-            f.attrs["wire"] = json.dumps(wire.to_dict())
-            f.attrs["ramp"] = json.dumps(ramp.to_dict())
-            f.attrs["seed"] = json.dumps(_jsonable_seed(seed))
-            f.attrs["versions"] = json.dumps(versions())
-            f.attrs["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-            for k, v in (attrs or {}).items():
-                f.attrs[k] = json.dumps(v)
+            write_run_attrs(f, wire=wire, seed=seed, attrs=attrs, ramp=ramp.to_dict())
             f.create_dataset("lambda", data=np.asarray(ramp.lambdas))
             f.create_dataset("positions", data=pos, compression="gzip", shuffle=True)
             f.create_dataset("initial", data=np.array([r.initial for r in results]))
