@@ -315,7 +315,8 @@ def _loop_growth(inj: Series, p: int) -> tuple[Estimate, str]:
         top = max((n for n, _ in spans), default=math.nan)
         return Estimate(math.nan, math.nan, 0), (
             f"too few loops: n_loops spans a factor {top:.3g} at most (needs {LOOP_RANGE:g} or a "
-            f"decade in L_in)")
+            f"decade in L_in)"
+        )
     return _fit_replicas(inj.lam, y), "fitted"
 
 

@@ -150,7 +150,7 @@ def discuss(rec, records) -> dict[str, str]:
         c, r = ex["cavity"], ex["ramp"]
         keys = [k for k in rows if k.startswith("cavity_") and k.endswith(f"_{w}")]
         for key in keys:
-            k = key[len("cavity_"):-len(f"_{w}")]
+            k = key[len("cavity_") : -len(f"_{w}")]
             out[key] = _row_sentence(k, c[k], r[k], rows[key]["verdict"], ex)
         counts: dict[str, int] = {}
         for key in keys:
@@ -173,14 +173,16 @@ def _row_sentence(k: str, c: dict, r: dict, verdict: str, ex: dict) -> str:
     """One row's sentence: the two values, their ratio and the verdict."""
     cv, rv = c["value"], r["value"]
     if cv is None or rv is None:
-        return (f"{k}: cavity {_v(c)}, potential {_v(r)}: {verdict}.")
+        return f"{k}: cavity {_v(c)}, potential {_v(r)}: {verdict}."
     ratio = f"; cavity/potential = {cv / rv:.3g}" if rv != 0 else ""
     where = (f"over φ ∈ [{ex['pressure_window'][0]:.3g}, {ex['pressure_window'][1]:.3g}]"
              if k == "pressure_exponent" else
              f"at φ = {ex['phi_matched']:.3g} (cavity) / {ex['phi_ramp_matched']:.3g} "
              "(potential)")  # fmt: skip
-    return (f"{k} {where}: cavity {_v(c)}, potential {_v(r)} (the cavity's is "
-            f"{'lower' if cv < rv else 'higher' if cv > rv else 'equal'}{ratio}): {verdict}.")
+    return (
+        f"{k} {where}: cavity {_v(c)}, potential {_v(r)} (the cavity's is "
+        f"{'lower' if cv < rv else 'higher' if cv > rv else 'equal'}{ratio}): {verdict}."
+    )
 
 
 def _v(e: dict) -> str:

@@ -333,6 +333,16 @@ def _twin(name: str, pl: Record, pn: Record) -> Record:
     )
 
 
+def _measure_both(ctx: Context, name: str, measure_one) -> Record:
+    """:func:`_twin` of ``measure_one(series, replicas)`` on the ``elastic`` series (per length)
+    and on ``elastic_per_node`` (per node, reindexed to the same points)."""
+    el = ctx.series["elastic"]
+    pn = ctx.series["elastic_per_node"].reindex(el.keys)
+    with _missing_points_ok():
+        twin = measure_one(pn, ctx.profile["per_node_replicas"])
+    return _twin(name, measure_one(el, ctx.replicas), twin)
+
+
 def _per_node_records(records: Mapping[str, Record]) -> dict[str, Record]:
     """The per-node twin of every record that has one (:func:`_twin`), else the record."""
     return {k: r.detail.get("per_node", r) for k, r in records.items()}

@@ -209,7 +209,8 @@ def _comparison_table(an: Analysis, heading: str, a: str, b: str) -> list[tuple]
         [
             r["quantity"],
             _num(r["ours"], r.get("ours_sigma")),
-            "—" if r["paper"] is None or r["paper"] != r["paper"]
+            "—"
+            if r["paper"] is None or r["paper"] != r["paper"]
             else _num(r["paper"], r.get("paper_sigma")),
             _deviation(r),
             r["verdict"],
@@ -220,8 +221,8 @@ def _comparison_table(an: Analysis, heading: str, a: str, b: str) -> list[tuple]
     ]
     disc = _discussion(an)
     items = [
-        f"**{r['quantity']}** — {r['verdict']}. {r['note']}." + (
-            f" {disc[r['key']]}" if r["key"] in disc else "")
+        f"**{r['quantity']}** — {r['verdict']}. {r['note']}."
+        + (f" {disc[r['key']]}" if r["key"] in disc else "")
         for r in an.rows
     ]
     return [("h2", heading), ("table", head, body), ("h3", "Discussion of each row"),

@@ -28,11 +28,10 @@ from .common import (
     _combine,
     _jsonable,
     _linear_slope,
-    _missing_points_ok,
+    _measure_both,
     _num,
     _pool,
     _row,
-    _twin,
 )
 from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import LAM_FIG3, Series, _dm, _dm_fit
@@ -329,11 +328,7 @@ def _nanmean(a, axis=None):
 
 def measure(ctx: Context) -> Record:
     """D_M, its alternatives and its saturation, per length and per node."""
-    el = ctx.series["elastic"]
-    pn = ctx.series["elastic_per_node"].reindex(el.keys)
-    with _missing_points_ok():
-        twin = _measure(pn, ctx.profile["per_node_replicas"])
-    return _twin(NAME, _measure(el, ctx.replicas), twin)
+    return _measure_both(ctx, NAME, _measure)
 
 
 def _draw(rec: Record):

@@ -32,11 +32,10 @@ from .common import (
     _fit_log_prefactor,
     _fit_replicas,
     _jsonable,
-    _missing_points_ok,
+    _measure_both,
     _num,
     _pool,
     _row,
-    _twin,
 )
 from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import STRAIGHT, Series
@@ -172,11 +171,7 @@ def _rods(el: Series) -> tuple[dict, dict]:
 
 def measure(ctx: Context) -> Record:
     """The exponents of γ, per length (``elastic``) and per node (``elastic_per_node``)."""
-    el = ctx.series["elastic"]
-    pn = ctx.series["elastic_per_node"].reindex(el.keys)
-    with _missing_points_ok():
-        twin = _measure(pn, ctx.profile["per_node_replicas"])
-    return _twin(NAME, _measure(el, ctx.replicas), twin)
+    return _measure_both(ctx, NAME, _measure)
 
 
 def _measure(el: Series, nrep: int) -> Record:

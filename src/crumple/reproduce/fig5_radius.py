@@ -26,10 +26,9 @@ from .common import (
     _both_readings_reasons,
     _fit_log_prefactor,
     _jsonable,
-    _missing_points_ok,
+    _measure_both,
     _pool,
     _row,
-    _twin,
 )
 from .experiments import ELASTIC, ELASTIC_PER_NODE
 from .series import Series, _alpha, _local_slopes
@@ -123,11 +122,7 @@ def _alpha_log_prefactor(el: Series, points) -> float:
 
 def measure(ctx: Context) -> Record:
     """α, its local slopes and the collapse, per length and per node."""
-    el = ctx.series["elastic"]
-    pn = ctx.series["elastic_per_node"].reindex(el.keys)
-    with _missing_points_ok():
-        twin = _measure(pn, ctx.profile["per_node_replicas"])
-    return _twin(NAME, _measure(el, ctx.replicas), twin)
+    return _measure_both(ctx, NAME, _measure)
 
 
 def _measure(el: Series, nrep: int) -> Record:
