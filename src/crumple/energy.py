@@ -38,7 +38,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .energy_kernels import (
     _barrier_rows,
@@ -51,11 +50,13 @@ from .energy_kernels import (
     _line_prepare,
     _max_displacement,
     _pattern_where,
+    _scatter_add,
     _total_eg,
     _wall_eg,
 )
 from .geometry._input import _as_positions
 from .geometry.distance import _node_segment_pairs
+from .linalg import CSC
 from .model import Plasticity, Wire
 
 __all__ = [
@@ -424,25 +425,37 @@ class WireEnergy:
         indefinite. The stretching blocks stay exact: their negative transverse stiffness
         under compression is what makes a straight wire buckle, and the fallback must keep it.
         """
-        w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
-        ks, js = self._pairs(x)
-        rows, cols, vals = _hessian_triplets(
-            x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
-            self.weights, ks, js, w.hard_core, w.hard_core_energy, project_contacts,
-            project_bending, self._radius,
-        )  # fmt: skip
         ndof = x.size
         if dense is None:
             dense = ndof <= DENSE_LIMIT
         if dense:
+            rows, cols, vals = self._triplets(x, project_contacts, project_bending)
             h = np.bincount(rows * ndof + cols, weights=vals, minlength=ndof * ndof)
             return h.reshape(ndof, ndof)
+        return self.hessian_csc(x, project_contacts=project_contacts,
+                                project_bending=project_bending).tocsc()  # fmt: skip
+
+    def hessian_csc(self, x, *, project_contacts: bool = False, project_bending: bool = False):
+        """The sparse Hessian of :meth:`hessian` as a :class:`crumple.linalg.CSC`: the same
+        arrays, without building a SciPy matrix (the Newton minimiser's hot path; ``x`` is
+        trusted to be a float array of shape (n_nodes, 2))."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        rows, cols, vals = self._triplets(x, project_contacts, project_bending)
+        ks = self._ks
         if self._pattern is None or self._pattern[0] is not ks:
-            self._pattern = self._new_pattern(ks, js, rows, cols, ndof)
+            self._pattern = self._new_pattern(ks, self._js, rows, cols, x.size)
         _, _, indptr, indices, where = self._pattern
-        data = np.bincount(where, weights=vals, minlength=indices.shape[0])
-        return sp.csc_matrix((data, indices, indptr), shape=(ndof, ndof), copy=False)
+        return CSC(_scatter_add(where, vals, indices.shape[0]), indices, indptr)
+
+    def _triplets(self, x, project_contacts, project_bending):
+        w = self.wire
+        ks, js = self._pairs(x)
+        return _hessian_triplets(
+            x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
+            self.weights, ks, js, w.hard_core, w.hard_core_energy, project_contacts,
+            project_bending, self._radius,
+        )  # fmt: skip
 
     def _new_pattern(self, ks, js, rows, cols, ndof):
         """The pattern for a rebuilt neighbour list. A rebuilt list often holds the same pairs,

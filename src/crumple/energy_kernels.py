@@ -466,6 +466,16 @@ def _csc_pattern_kernel(rows, cols, ndof):
 
 
 @njit(cache=True)
+def _scatter_add(where, vals, nnz):
+    """data[where[e]] += vals[e] over the triplets in order, from zeros: ``np.bincount(where,
+    weights=vals, minlength=nnz)`` bit for bit, without its checks."""
+    data = np.zeros(nnz)
+    for e in range(where.shape[0]):
+        data[where[e]] += vals[e]
+    return data
+
+
+@njit(cache=True)
 def _pattern_where(rows, cols, indptr, indices):
     """The entry of an existing CSC pattern (rows sorted in each column) each triplet adds to,
     by binary search; ``where[0] = -1`` when some triplet has no entry in it."""

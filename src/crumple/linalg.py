@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from numba import njit
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-__all__ = ["LDLT", "Factorization"]
+__all__ = ["CSC", "LDLT", "Factorization"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -266,14 +266,75 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
 
 
 @njit(cache=True)
+def _abs_weighted_row_max(indptr, indices, data, u):
+    """max_i Σ_j |A_ij| u_j of a symmetric CSC matrix, as column sums Σ_i |A_ij| u_i (the
+    same products added in the same order as ``np.bincount`` over the entries); 0 if empty,
+    NaN if any sum is NaN."""
+    n = indptr.shape[0] - 1
+    best = 0.0
+    for j in range(n):
+        s = 0.0
+        for p in range(indptr[j], indptr[j + 1]):
+            s += abs(data[p]) * u[indices[p]]
+        if s > best or s != s:
+            best = s
+            if s != s:
+                return s
+    return best
+
+
+@njit(cache=True)
 def _gather(src, data, out):
     for i in range(src.shape[0]):
         out[i] = data[src[i]]
 
 
 # --------------------------------------------------------------------------------------------
-# Symbolic analysis and the factorisation object
+# A raw CSC matrix, the symbolic analysis and the factorisation object
 # --------------------------------------------------------------------------------------------
+
+
+class CSC:
+    """A square sparse matrix held as its raw CSC arrays (both triangles), unchecked.
+
+    What a Newton iteration needs of its Hessian without the cost of building a SciPy matrix
+    (its index checks cost more than the assembly at N = 100): :meth:`LDLT.factorize` takes
+    it as it is, and :meth:`tocsc` gives the SciPy matrix, on the same arrays, where an
+    external API needs one. The caller guarantees the CSC invariants (rows sorted and
+    unique within each column, ``indptr`` of length n + 1).
+
+    >>> a = CSC(np.array([2.0, 1.0, 1.0, 3.0]), np.array([0, 1, 0, 1]), np.array([0, 2, 4]))
+    >>> a.shape, a.nnz, (a @ np.ones(2)).tolist()
+    ((2, 2), 4, [3.0, 4.0])
+    """
+
+    __slots__ = ("_scipy", "data", "indices", "indptr", "shape")
+    format = "csc"
+
+    def __init__(self, data, indices, indptr):
+        self.data, self.indices, self.indptr = data, indices, indptr
+        n = indptr.shape[0] - 1
+        self.shape = (n, n)
+        self._scipy = None
+
+    @property
+    def nnz(self) -> int:
+        return int(self.indptr[-1])
+
+    def tocsc(self) -> sp.csc_matrix:
+        """The SciPy CSC matrix on the same arrays (built once)."""
+        if self._scipy is None:
+            self._scipy = sp.csc_matrix(
+                (self.data, self.indices, self.indptr), shape=self.shape, copy=False
+            )
+        return self._scipy
+
+    def __matmul__(self, v):
+        return self.tocsc() @ v
+
+    def abs_row_max(self, u) -> float:
+        """max_i Σ_j |A_ij| u_j (A symmetric): the largest change of A u's rows by a move u."""
+        return float(_abs_weighted_row_max(self.indptr, self.indices, self.data, u))
 
 
 class _Symbolic:
@@ -307,7 +368,7 @@ class _Symbolic:
 
 
 def _rcm(a) -> np.ndarray:
-    return np.asarray(reverse_cuthill_mckee(a.tocsr(), symmetric_mode=True), dtype=np.int64)
+    return np.asarray(reverse_cuthill_mckee(a.tocsc().tocsr(), symmetric_mode=True), dtype=np.int64)
 
 
 def _permuted_upper(a, perm):
@@ -460,12 +521,15 @@ class LDLT:
         return self._sym
 
     def factorize(self, a, *, shift=None, floor=None) -> Factorization:
-        """Factorise ``a + diag(shift)`` (a symmetric CSC matrix holding both triangles).
+        """Factorise ``a + diag(shift)`` (a symmetric CSC matrix holding both triangles: SciPy
+        or :class:`CSC`; a dense array is converted).
 
         With ``floor`` (a vector), pivots below it are raised (modified LDLᵀ): the result is
         always positive definite and solves a nearby positive definite system.
         """
-        if not sp.issparse(a):
+        if isinstance(a, CSC):
+            pass
+        elif not sp.issparse(a):
             a = sp.csc_matrix(np.asarray(a, dtype=np.float64))
         elif a.format != "csc":
             a = a.tocsc()

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .linalg import LDLT
+from .linalg import CSC, LDLT
 from .minimize_result import MinimizeResult, _row_norms, _validate_common, max_force
 from .powell import powell, random_directions
 
@@ -101,7 +101,8 @@ def newton(
     x0 : array_like, shape (n, dim) or (n,)
         Start; must be admissible (``feasible(x0)``).
     hess : callable
-        ``hess(x)`` -> Hessian over ``x.ravel()``: dense ndarray or SciPy sparse matrix. A
+        ``hess(x)`` -> Hessian over ``x.ravel()``: dense ndarray, SciPy sparse matrix, or
+        :class:`crumple.linalg.CSC` (raw arrays, no SciPy object built per iteration). A
         sparse one whose index arrays do not change between calls is analysed once.
     hess_fallback : callable, optional
         A positive (semi-)definite approximation, in the same pattern, used where the exact
@@ -276,6 +277,8 @@ def _constrained(mask, fun, hess, hess_fallback):
         return e, g
 
     def chess(h):
+        if isinstance(h, CSC):
+            h = h.tocsc()
         if sp.issparse(h):
             h = h.tocsc()
             col = np.repeat(np.arange(h.shape[1]), np.diff(h.indptr))
@@ -346,7 +349,7 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
             st.skip_left = st.skip
     h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
     st.nhev += 1
-    hs = h if sp.issparse(h) else sp.csc_matrix(h)
+    hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
     sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
     for _ in range(60):
         f = ldl.factorize(hs, shift=sigma * m, floor=floor)
@@ -388,6 +391,8 @@ def _force_resolution(h, x) -> float:
     when the coordinates move by one unit in the last place. Below it the force is noise: a
     stiff wire of 10⁴ nodes at |x| ~ 0.5 cannot be brought below ~2e-5 (measured, B = 0.05)."""
     u = np.spacing(np.abs(x)).ravel()
+    if isinstance(h, CSC):
+        return RESOLUTION_FACTOR * h.abs_row_max(u) if h.nnz else 0.0
     if sp.issparse(h) and h.format == "csc" and h.shape[0] == h.shape[1] and h.nnz:
         # column sums of |H| u[row], = row sums by symmetry: no new sparse matrix
         r = np.bincount(
@@ -486,7 +491,7 @@ def _lowest_mode(h, m, ldl, check, floor, modes=None):
     v0 = check.negative_direction()
     if v0 is None:
         return 0.0, None
-    hs = sp.csc_matrix(h) if not sp.issparse(h) else h
+    hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
     n = hs.shape[0]
     v0 = _deflate(v0, modes, m)
     mu0 = _rayleigh(hs, m, v0)
@@ -553,4 +558,3 @@ def resolution(energy: float) -> float:
     True
     """
     return max(16.0 * _EPS * abs(energy), 1e-300)
-

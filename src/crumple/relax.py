@@ -135,10 +135,10 @@ def minimize_wire(
         return newton(
             energy,
             x0,
-            hess=lambda x: energy.hessian(x, dense=False),
+            hess=energy.hessian_csc,
             # contacts projected on their positive part; bending and stretching exact (measured:
             # projecting the joints too doubled the iterations of the default ramp)
-            hess_fallback=lambda x: energy.hessian(x, dense=False, project_contacts=True),
+            hess_fallback=lambda x: energy.hessian_csc(x, project_contacts=True),
             ftol=ftol,
             maxiter=maxiter,
             max_step=max_step,
