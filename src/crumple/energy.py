@@ -50,6 +50,7 @@ from .energy_kernels import (
     _line_prepare,
     _max_displacement,
     _pattern_where,
+    _same_pairs,
     _scatter_add,
     _total_eg,
     _wall_eg,
@@ -362,7 +363,11 @@ class WireEnergy:
 
     def _pairs(self, x):
         if self._ref is None or _max_displacement(x, self._ref) > 0.5 * self.skin:
-            self._ks, self._js = _node_segment_pairs(x, self.wire.hard_core + self.skin)
+            ks, js = _node_segment_pairs(x, self.wire.hard_core + self.skin)
+            # the same pairs as before: keep the arrays themselves, so that the Hessian keeps
+            # its pattern (and the factorisation its analysis) without looking them up again
+            if self._ks is None or not _same_pairs(ks, js, self._ks, self._js):
+                self._ks, self._js = ks, js
             self._ref = x.copy()
             self.rebuilds += 1
         return self._ks, self._js

@@ -466,6 +466,17 @@ def _csc_pattern_kernel(rows, cols, ndof):
 
 
 @njit(cache=True)
+def _same_pairs(ks, js, ks0, js0):
+    """The pair lists (ks, js) and (ks0, js0) are equal."""
+    if ks.shape[0] != ks0.shape[0]:
+        return False
+    for p in range(ks.shape[0]):
+        if ks[p] != ks0[p] or js[p] != js0[p]:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _scatter_add(where, vals, nnz):
     """data[where[e]] += vals[e] over the triplets in order, from zeros: ``np.bincount(where,
     weights=vals, minlength=nnz)`` bit for bit, without its checks."""

@@ -13,7 +13,9 @@ from typing import Literal
 import numpy as np
 
 from .energy import WireEnergy, confinement_weights
-from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
+from .geometry import disc_exit_fraction, has_crossings
+from .geometry.ccd import _safe_fraction
+from .geometry.crossings import _has_crossings
 from .minimize import MinimizeResult, newton, powell
 from .model import Wire
 
@@ -128,8 +130,8 @@ def minimize_wire(
             raise ValueError("fixed nodes need method='newton'")
         free_rotation = not fixed.any()
 
-    def feasible(x):
-        return (radius is None or _inside(x, radius)) and not has_crossings(x)
+    def feasible(x):  # x: the minimiser's own finite (n_nodes, 2) array, checked no further
+        return (radius is None or _inside(x, radius)) and not _has_crossings(x)
 
     if method == "newton":
         return newton(
@@ -187,12 +189,13 @@ def _step_limit(radius):
     """The safe fraction of a step: no node-segment contact, and no node reaching the wall.
 
     Testing the nodes against the wall is enough: the disc is convex, so a segment whose ends
-    are inside lies inside."""
+    are inside lies inside. ``x`` and ``p`` are the callers' own finite float arrays of shape
+    (n_nodes, 2) (:func:`crumple.geometry.max_safe_fraction` without its input checks)."""
     if radius is None:
-        return max_safe_fraction
+        return _safe_fraction
 
     def limit(x, p):
-        return min(max_safe_fraction(x, p), disc_exit_fraction(x, p, radius))
+        return min(_safe_fraction(x, p), disc_exit_fraction(x, p, radius))
 
     return limit
 

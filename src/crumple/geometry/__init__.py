@@ -10,8 +10,8 @@ virtual 10^5 x 10^5 grid, and only those are stored.
 
 The crossing test is *exact*: orientations are evaluated in floating point with Shewchuk's
 static error bound, and the rare pairs whose sign the bound cannot certify are decided again
-in exact rational arithmetic (:class:`fractions.Fraction`), so near-degenerate contacts are
-never misclassified by round-off.
+in exact rational arithmetic (the coordinates as integers over a common power of two), so
+near-degenerate contacts are never misclassified by round-off.
 
 The package has one module per concept: ``cells`` (the spatial hash), ``crossings`` (the exact
 intersection test), ``distance`` (distances, close pairs, the hard core's node-segment

@@ -173,9 +173,15 @@ def max_safe_fraction(positions, step) -> float:
     stp = _as_positions(step)
     if stp.shape != pos.shape:
         raise ValueError(f"step has shape {stp.shape}, positions {pos.shape}")
+    return _safe_fraction(pos, stp)
+
+
+def _safe_fraction(pos: np.ndarray, step: np.ndarray) -> float:
+    """:func:`max_safe_fraction` of checked float arrays of one shape (n_nodes, 2), without
+    the checks: the minimiser's hot path, where both are its own finite arrays."""
     if pos.shape[0] < 3:
         return 1.0
-    return float(_max_safe_fraction(pos, stp))
+    return float(_max_safe_fraction(pos, step))
 
 
 def disc_exit_fraction(positions, step, radius: float) -> float:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from fractions import Fraction
-
 import numpy as np
 from numba import njit
 
@@ -128,10 +126,21 @@ def _crossing_candidates(pos, stop_at_first):
     return hits[:nh], unsure[:nu]
 
 
-def _orient_exact(a, b, c):
-    ax, ay, bx, by, cx, cy = (Fraction(float(v)) for v in (*a, *b, *c))
+def _as_integers(*values) -> list[int]:
+    """Floats as integers over one common power of two (v_k = n_k / 2^s, exactly): signs of
+    sums and products of them are those of the rationals, in fast integer arithmetic."""
+    ratios = [float(v).as_integer_ratio() for v in values]  # denominators: powers of two
+    den = max(d for _, d in ratios)
+    return [num * (den // d) for num, d in ratios]
+
+
+def _orient_int(ax, ay, bx, by, cx, cy) -> int:
     det = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
     return (det > 0) - (det < 0)
+
+
+def _orient_exact(a, b, c):
+    return _orient_int(*_as_integers(*a, *b, *c))
 
 
 def _intersect_exact(pos: np.ndarray, i: int, j: int) -> bool:
@@ -140,16 +149,14 @@ def _intersect_exact(pos: np.ndarray, i: int, j: int) -> bool:
         if _orient_exact(p1, p2, q2) != 0:
             return False
         u, v = p2 - p1, q2 - q1
-        return (
-            Fraction(float(u[0])) * Fraction(float(v[0]))
-            + Fraction(float(u[1])) * Fraction(float(v[1]))
-            < 0
-        )
+        ux, uy, vx, vy = _as_integers(*u, *v)
+        return ux * vx + uy * vy < 0
+    ax, ay, bx, by, cx, cy, dx, dy = _as_integers(*p1, *p2, *q1, *q2)
     o = (
-        _orient_exact(p1, p2, q1),
-        _orient_exact(p1, p2, q2),
-        _orient_exact(q1, q2, p1),
-        _orient_exact(q1, q2, p2),
+        _orient_int(ax, ay, bx, by, cx, cy),
+        _orient_int(ax, ay, bx, by, dx, dy),
+        _orient_int(cx, cy, dx, dy, ax, ay),
+        _orient_int(cx, cy, dx, dy, bx, by),
     )
     return bool(_decide.py_func(*o, *p1, *p2, *q1, *q2))
 
@@ -199,7 +206,11 @@ def has_crossings(positions) -> bool:
     >>> has_crossings([[0, 0], [1, 0], [1, 1], [0.5, -1]])
     True
     """
-    pos = _as_positions(positions)
+    return _has_crossings(_as_positions(positions))
+
+
+def _has_crossings(pos: np.ndarray) -> bool:
+    """:func:`has_crossings` of a checked, C-contiguous float array (the minimiser's hot path)."""
     if pos.shape[0] < 3:
         return False
     hits, unsure = _crossing_candidates(pos, True)
