@@ -240,10 +240,9 @@ def _put_block(rows, cols, vals, m, nodes, block):
 
 
 @njit(cache=True)
-def _phi_hessian(vx, vy):
-    """Hessian of the polar angle atan2(vy, vx) with respect to (vx, vy)."""
+def _phi_hessian(vx, vy, h):
+    """Hessian of the polar angle atan2(vy, vx) with respect to (vx, vy), into h (2, 2)."""
     r4 = (vx * vx + vy * vy) ** 2
-    h = np.empty((2, 2))
     h[0, 0] = 2.0 * vx * vy / r4
     h[0, 1] = (vy * vy - vx * vx) / r4
     h[1, 0] = h[0, 1]
@@ -277,6 +276,8 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
     block6 = np.empty((6, 6))
     block4 = np.empty((4, 4))
     g = np.empty(6)
+    ha = np.empty((2, 2))
+    hb = np.empty((2, 2))
     # bending: f'' ∇θ∇θᵀ + f' ∇²θ, with ∇²θ = -Hφ(a) on a = x_i - x_{i-1}, +Hφ(b) on b
     for i in range(1, n - 1):
         ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
@@ -293,8 +294,8 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
         for a in range(6):
             for b in range(6):
                 block6[a, b] = d2f * g[a] * g[b]
-        ha = _phi_hessian(ax, ay)
-        hb = _phi_hessian(bx, by)
+        _phi_hessian(ax, ay, ha)
+        _phi_hessian(bx, by, hb)
         for u in range(2):
             for v in range(2):
                 ca = -df * ha[u, v]  # on a: pattern [[+, -], [-, +]] over nodes i-1, i

@@ -284,9 +284,27 @@ def _abs_weighted_row_max(indptr, indices, data, u):
 
 
 @njit(cache=True)
-def _gather(src, data, out):
+def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, parent, lp, li, lx, d, first):
+    """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
+    entry e is ``data[src[e]]``), shift and floor given in the original order (empty: none;
+    an empty floor: no modification), gathered and permuted here."""
+    ax = np.empty(src.shape[0])
     for i in range(src.shape[0]):
-        out[i] = data[src[i]]
+        ax[i] = data[src[i]]
+    sh = np.zeros(n)
+    if shift.shape[0]:
+        for k in range(n):
+            sh[k] = shift[perm[k]]
+    fl = np.zeros(n)
+    modify = floor.shape[0] > 0
+    if modify:
+        for k in range(n):
+            fl[k] = floor[perm[k]]
+    first_value = np.zeros(1)
+    return _factor(n, ap, ai, ax, sh, fl, modify, parent, lp, li, lx, d, first, first_value)
+
+
+_EMPTY = np.empty(0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -535,17 +553,15 @@ class LDLT:
             a = a.tocsc()
         s = self.symbolic(a)
         n = s.n
-        ax = np.empty(s.src.shape[0])
-        _gather(s.src, np.ascontiguousarray(a.data, dtype=np.float64), ax)
-        sh = np.zeros(n) if shift is None else np.ascontiguousarray(shift, dtype=np.float64)[s.perm]
-        modify = floor is not None
-        fl = np.zeros(n) if floor is None else np.ascontiguousarray(floor, dtype=np.float64)[s.perm]
         lx = np.empty(s.l_nnz)
         d = np.empty(n)
-        first, first_value = np.full(1, -1, dtype=np.int64), np.zeros(1)
-        neg, mod = _factor(
-            n, s.ap, s.ai, ax, sh, fl, modify, s.parent, s.lp, s.ai_l, lx, d, first, first_value
-        )
+        first = np.full(1, -1, dtype=np.int64)
+        neg, mod = _factor_permuted(
+            s.src, np.ascontiguousarray(a.data, dtype=np.float64), s.perm,
+            _EMPTY if shift is None else np.ascontiguousarray(shift, dtype=np.float64),
+            _EMPTY if floor is None else np.ascontiguousarray(floor, dtype=np.float64),
+            n, s.ap, s.ai, s.parent, s.lp, s.ai_l, lx, d, first,
+        )  # fmt: skip
         self.factorizations += 1
         f = Factorization(s, lx, d, neg, mod)
         f.first_modified = int(first[0])

@@ -223,7 +223,7 @@ def newton(
             p = _barrier_step(st, p, barriers)
         if mask is not None:  # zero already in exact arithmetic; made exact in floating point
             p.reshape(-1)[mask] = 0.0
-        if not np.all(np.isfinite(p)):
+        if not np.isfinite(p).all():
             message = "could not make the Hessian positive definite (non-finite factor)"
             break
         failure = _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step)
@@ -419,9 +419,9 @@ def _metric(metric, x) -> np.ndarray:
 def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step):
     """Cap, cut and backtrack the step ``p``; update ``st`` and its radius; None or why not."""
     slope = float(np.vdot(st.g, p))
-    if not (slope < 0 and np.all(np.isfinite(p))):
+    if not (slope < 0 and np.isfinite(p).all()):
         return "the Newton step is not a descent direction (numerical breakdown)"
-    biggest = float(np.max(_row_norms(p)))
+    biggest = max_force(p)  # the largest row displacement
     alpha = 1.0
     capped = biggest > st.radius
     if capped:
