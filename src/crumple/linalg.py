@@ -266,6 +266,17 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
 
 
 @njit(cache=True)
+def _csc_matvec(indptr, indices, data, v):
+    """A v for A in CSC: SciPy's ``csc_matvec`` loop, the same products added in its order."""
+    out = np.zeros(indptr.shape[0] - 1)
+    for j in range(indptr.shape[0] - 1):
+        vj = v[j]
+        for p in range(indptr[j], indptr[j + 1]):
+            out[indices[p]] += data[p] * vj
+    return out
+
+
+@njit(cache=True)
 def _abs_weighted_row_max(indptr, indices, data, u):
     """max_i Σ_j |A_ij| u_j of a symmetric CSC matrix, as column sums Σ_i |A_ij| u_i (the
     same products added in the same order as ``np.bincount`` over the entries); 0 if empty,
@@ -348,6 +359,9 @@ class CSC:
         return self._scipy
 
     def __matmul__(self, v):
+        v = np.asarray(v)
+        if v.ndim == 1 and v.dtype == np.float64 and v.shape[0] == self.shape[1]:
+            return _csc_matvec(self.indptr, self.indices, self.data, v)
         return self.tocsc() @ v
 
     def abs_row_max(self, u) -> float:
