@@ -330,7 +330,8 @@ class CSC:
     (its index checks cost more than the assembly at N = 100): :meth:`LDLT.factorize` takes
     it as it is, and :meth:`tocsc` gives the SciPy matrix, on the same arrays, where an
     external API needs one. The caller guarantees the CSC invariants (rows sorted and
-    unique within each column, ``indptr`` of length n + 1).
+    unique within each column, ``indptr`` of length n + 1) and a structurally symmetric
+    pattern (entry (i, j) stored whenever (j, i) is, as an assembly of symmetric blocks gives).
 
     >>> a = CSC(np.array([2.0, 1.0, 1.0, 3.0]), np.array([0, 1, 0, 1]), np.array([0, 2, 4]))
     >>> a.shape, a.nnz, (a @ np.ones(2)).tolist()
@@ -400,7 +401,11 @@ class _Symbolic:
 
 
 def _rcm(a) -> np.ndarray:
-    return np.asarray(reverse_cuthill_mckee(a.tocsc().tocsr(), symmetric_mode=True), dtype=np.int64)
+    if isinstance(a, CSC):  # structurally symmetric: its CSC arrays are those of its CSR
+        csr = sp.csr_matrix((a.data, a.indices, a.indptr), shape=a.shape, copy=False)
+    else:
+        csr = a.tocsr()
+    return np.asarray(reverse_cuthill_mckee(csr, symmetric_mode=True), dtype=np.int64)
 
 
 def _permuted_upper(a, perm):
