@@ -932,3 +932,32 @@ def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(s
     assert len(energy.barriers(pos, 0.2 * step)[2]) == 0
     inside = staggered_hairpin(m, seg, 0.5 * d)
     assert len(energy.barriers(inside, step)[2]) == 0
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), ndof=st.integers(1, 120), t=st.integers(0, 1500))
+def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
+    """The fixed-pattern assembly's kernels: the CSC pattern is the sorted distinct (col, row)
+    keys, each triplet's entry is its key's rank, a subset's entries are found in it, a
+    missing key is reported, and the scatter adds as np.bincount does, bit for bit."""
+    from crumple.energy_kernels import _csc_pattern_kernel, _pattern_where, _scatter_add
+
+    rng = np.random.default_rng(seed)
+    rows, cols = rng.integers(0, ndof, t), rng.integers(0, ndof, t)
+    cols[: t // 3] = rng.integers(0, min(ndof, 2), t // 3)  # some crowded columns
+    indptr, indices, where = _csc_pattern_kernel(rows, cols, ndof)
+    keys, rank = np.unique(cols * ndof + rows, return_inverse=True)
+    assert np.array_equal(indices, keys % ndof)
+    assert np.array_equal(indptr, np.searchsorted(keys // ndof, np.arange(ndof + 1)))
+    assert np.array_equal(where, rank)
+    half = slice(0, t // 2)
+    assert np.array_equal(_pattern_where(rows[half], cols[half], indptr, indices), rank[half])
+    if t and len(keys) < ndof * ndof:
+        missing = np.setdiff1d(np.arange(ndof * ndof), keys)[0]
+        w = _pattern_where(np.r_[rows, missing % ndof], np.r_[cols, missing // ndof], indptr,
+                           indices)  # fmt: skip
+        assert w[0] == -1
+    vals = rng.standard_normal(t) * 10.0 ** rng.uniform(-8, 8, t)
+    assert np.array_equal(
+        _scatter_add(where, vals, len(keys)), np.bincount(where, vals, minlength=len(keys))
+    )
