@@ -57,59 +57,87 @@ def _etree(n, ap, ai):
 
 
 @njit(cache=True)
-def _factor(n, ap, ai, ax, shift, floor, modify, parent, lp, li, lx, d, first, first_value):
-    """Numeric LDLᵀ of A + diag(shift) into (lp, li, lx, d); returns (negative, modified).
-
-    ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
-    a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
-    the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``.
-    """
+def _row_patterns(n, ap, ai, parent, lp):
+    """The symbolic part of :func:`_factor`, done once per pattern: for every row k of L, the
+    columns c of its nonzeros in the order the numeric factorisation visits them (the
+    topological order of QDLDL's elimination-tree walk, ``rc[rp[k]:rp[k + 1]]``), where each
+    l_kc goes in L (``rpos``), and L's row indices ``li``. Returns (rp, rc, rpos, li)."""
     marker = np.zeros(n, dtype=np.bool_)
     yidx = np.empty(n, dtype=np.int64)
     buf = np.empty(n, dtype=np.int64)
     nxt = lp[:-1].copy()
+    rp = np.zeros(n + 1, dtype=np.int64)
+    rc = np.empty(lp[n], dtype=np.int64)
+    rpos = np.empty(lp[n], dtype=np.int64)
+    li = np.empty(lp[n], dtype=np.int64)
+    t = 0
+    for k in range(n):
+        nnzy = 0
+        for p in range(ap[k], ap[k + 1]):
+            b = ai[p]
+            if b == k or marker[b]:
+                continue
+            marker[b] = True
+            buf[0] = b
+            ne = 1
+            c = parent[b]
+            while c != -1 and c < k:
+                if marker[c]:
+                    break
+                marker[c] = True
+                buf[ne] = c
+                ne += 1
+                c = parent[c]
+            while ne > 0:
+                ne -= 1
+                yidx[nnzy] = buf[ne]
+                nnzy += 1
+        for q in range(nnzy - 1, -1, -1):
+            c = yidx[q]
+            end = nxt[c]
+            li[end] = k
+            rc[t] = c
+            rpos[t] = end
+            t += 1
+            nxt[c] = end + 1
+            marker[c] = False
+        rp[k + 1] = t
+    return rp, rc, rpos, li
+
+
+@njit(cache=True)
+def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, first,
+            first_value):  # fmt: skip
+    """Numeric LDLᵀ of A + diag(shift) into (lp, li, lx, d); returns (negative, modified).
+
+    QDLDL's up-looking factorisation with its symbolic part precomputed (:func:`_row_patterns`:
+    the same operations in the same order, without the elimination-tree walks).
+    ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
+    a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
+    the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``.
+    """
     y = np.zeros(n)
     dinv = np.empty(n)
     negative = 0
     modified = 0
     for k in range(n):
         dk = shift[k]
-        nnzy = 0
         for p in range(ap[k], ap[k + 1]):
             b = ai[p]
             if b == k:
                 dk += ax[p]
-                continue
-            y[b] = ax[p]
-            if not marker[b]:
-                marker[b] = True
-                buf[0] = b
-                ne = 1
-                c = parent[b]
-                while c != -1 and c < k:
-                    if marker[c]:
-                        break
-                    marker[c] = True
-                    buf[ne] = c
-                    ne += 1
-                    c = parent[c]
-                while ne > 0:
-                    ne -= 1
-                    yidx[nnzy] = buf[ne]
-                    nnzy += 1
-        for q in range(nnzy - 1, -1, -1):
-            c = yidx[q]
+            else:
+                y[b] = ax[p]
+        for q in range(rp[k], rp[k + 1]):
+            c = rc[q]
             yc = y[c]
-            end = nxt[c]
+            end = rpos[q]
             for p in range(lp[c], end):
                 y[li[p]] -= lx[p] * yc
-            li[end] = k
             lk = yc * dinv[c]
             lx[end] = lk
             dk -= yc * lk
-            nxt[c] = end + 1
             y[c] = 0.0
-            marker[c] = False
         if not dk > 0.0:  # also NaN
             negative += 1
         if modify and not dk >= floor[k]:
@@ -295,7 +323,8 @@ def _abs_weighted_row_max(indptr, indices, data, u):
 
 
 @njit(cache=True)
-def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, parent, lp, li, lx, d, first):
+def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp, li, lx, d,
+                     first):  # fmt: skip
     """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
     entry e is ``data[src[e]]``), shift and floor given in the original order (empty: none;
     an empty floor: no modification), gathered and permuted here."""
@@ -312,7 +341,7 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, parent, lp, li, l
         for k in range(n):
             fl[k] = floor[perm[k]]
     first_value = np.zeros(1)
-    return _factor(n, ap, ai, ax, sh, fl, modify, parent, lp, li, lx, d, first, first_value)
+    return _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first, first_value)
 
 
 _EMPTY = np.empty(0)
@@ -552,7 +581,9 @@ class LDLT:
     def symbolic(self, a) -> _Symbolic:
         if self._sym is None or not self._sym.matches(a):
             sym = _Symbolic(a)
-            sym.ai_l = np.empty(sym.l_nnz, dtype=np.int64)
+            sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(
+                sym.n, sym.ap, sym.ai, sym.parent, sym.lp
+            )
             self._sym = sym
             self.analyses += 1
         return self._sym
@@ -579,7 +610,7 @@ class LDLT:
             s.src, np.ascontiguousarray(a.data, dtype=np.float64), s.perm,
             _EMPTY if shift is None else np.ascontiguousarray(shift, dtype=np.float64),
             _EMPTY if floor is None else np.ascontiguousarray(floor, dtype=np.float64),
-            n, s.ap, s.ai, s.parent, s.lp, s.ai_l, lx, d, first,
+            n, s.ap, s.ai, s.rp, s.rc, s.rpos, s.lp, s.ai_l, lx, d, first,
         )  # fmt: skip
         self.factorizations += 1
         f = Factorization(s, lx, d, neg, mod)
