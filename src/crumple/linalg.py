@@ -315,10 +315,9 @@ def _abs_weighted_row_max(indptr, indices, data, u):
         s = 0.0
         for p in range(indptr[j], indptr[j + 1]):
             s += abs(data[p]) * u[indices[p]]
-        if s > best or s != s:
-            best = s
-            if s != s:
-                return s
+        if s != s:
+            return s
+        best = max(best, s)
     return best
 
 
@@ -328,18 +327,10 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp,
     """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
     entry e is ``data[src[e]]``), shift and floor given in the original order (empty: none;
     an empty floor: no modification), gathered and permuted here."""
-    ax = np.empty(src.shape[0])
-    for i in range(src.shape[0]):
-        ax[i] = data[src[i]]
-    sh = np.zeros(n)
-    if shift.shape[0]:
-        for k in range(n):
-            sh[k] = shift[perm[k]]
-    fl = np.zeros(n)
+    ax = data[src]
+    sh = shift[perm] if shift.shape[0] else np.zeros(n)
     modify = floor.shape[0] > 0
-    if modify:
-        for k in range(n):
-            fl[k] = floor[perm[k]]
+    fl = floor[perm] if modify else np.zeros(n)
     first_value = np.zeros(1)
     return _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first, first_value)
 
