@@ -164,6 +164,21 @@ def test_spring_solve_stops_a_step_at_a_stiff_spring_and_ignores_far_ones():
     assert s[1] == 1.0
 
 
+def test_spring_solve_out_of_rounds_still_stops_at_the_first_contact():
+    """Identity model, p0 = (1, 1), springs at x_0 = 0.25 and x_1 = 0.5: with one round the
+    active set is not found (the second spring is still entered), and the step returned holds
+    the spring it enters first and is a descent direction. (Newton keeps p0 in that case:
+    using this step instead was measured and dropped, docs/performance.md.)"""
+    f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
+    args = (np.array([[0], [1]]), np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.5]))
+    s, ok = f.solve_springs(np.ones(2), *args, np.full(2, 1e9), rounds=1)
+    assert not ok
+    assert s[0] == pytest.approx(0.25, rel=1e-8) and s[1] == 1.0
+    assert np.dot(-np.ones(2), s) < 0
+    s, ok = f.solve_springs(np.ones(2), *args, np.full(2, 1e9))
+    assert ok and s == pytest.approx([0.25, 0.5], rel=1e-8)
+
+
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 60), density=st.floats(0.01, 0.5))
 def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):

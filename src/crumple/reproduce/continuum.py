@@ -12,8 +12,9 @@ writes a report with three sections:
   against the paper's closed form, with rest-angle disorder replicas and the perfect wire.
 
 Profiles: ``smoke`` (the test suite, seconds), ``quick`` (at most 10 minutes on 2 cores, with
-the current engine: N ≤ 400, Λ ≤ 10⁶) and ``full`` (issue 12's sizes: Λ up to 10¹⁰, N up to
-10⁴; it needs the N-independent engine of issue 9 and has not been run). The hard-core width
+N ≤ 400, Λ ≤ 10⁶) and ``full`` (issue 12's sizes: Λ up to 10¹⁰, N up to 10⁴; not run: at
+d = 10⁻⁵ L0 the engine's contact stages above Λ ≈ 4·10⁴ do not converge within 5000 Newton
+iterations, docs/performance.md, "Strong confinement"). The hard-core width
 is the model's default d = 1e-5 L0 in every profile (d/L is a dimensionless number of its own,
 held fixed so that it does not break the collapse).
 """
@@ -86,9 +87,10 @@ PROFILES = MappingProxyType(
         ),
         "quick": ContinuumProfile(
             name="quick",
-            description="QUICK PROFILE: small N (≤ 400) because the current engine's Newton "
-            "iterations grow with N; Λ ≤ 10⁵ for the collapse, ≤ 10⁶ for the sweep, 3 disorder "
-            "replicas; no power-law range is expected at these sizes",
+            description="QUICK PROFILE: small N (≤ 400), to fit in 10 minutes (contact stages "
+            "take thousands of Newton iterations at large Λ); Λ ≤ 10⁵ for the collapse, "
+            "≤ 10⁶ for the sweep, 3 disorder replicas; no power-law range is expected at "
+            "these sizes",
             replicas=3,
             confinements=_geom(1e2, 1e5, 10),
             collapse_points=(
@@ -108,8 +110,8 @@ PROFILES = MappingProxyType(
         ),
         "full": ContinuumProfile(
             name="full",
-            description="FULL PROFILE (issue 12): Λ up to 10¹⁰, N up to 10⁴; needs the "
-            "N-independent engine of issue 9 (not run yet)",
+            description="FULL PROFILE (issue 12): Λ up to 10¹⁰, N up to 10⁴; not run: contact "
+            "stages above Λ ≈ 4·10⁴ do not converge at d = 10⁻⁵ (docs/continuum.md)",
             replicas=5,
             confinements=_geom(1e2, 1e8, 25),
             collapse_points=(
