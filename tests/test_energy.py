@@ -923,6 +923,7 @@ def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(s
     h = 1e-9
     for row, val in zip(index, value, strict=True):
         k, j = row[0] // 2, row[2] // 2
+
         def dist(x, k=k, j=j):
             return point_segment_distance(x[k], x[j], x[j + 1])
 
@@ -940,7 +941,7 @@ def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
     """The fixed-pattern assembly's kernels: the CSC pattern is the sorted distinct (col, row)
     keys, each triplet's entry is its key's rank, a subset's entries are found in it, a
     missing key is reported, and the scatter adds as np.bincount does, bit for bit."""
-    from crumple.energy_kernels import _csc_pattern_kernel, _pattern_where, _scatter_add
+    from crumple.energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
 
     rng = np.random.default_rng(seed)
     rows, cols = rng.integers(0, ndof, t), rng.integers(0, ndof, t)

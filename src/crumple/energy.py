@@ -39,9 +39,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
 from .energy_kernels import (
     _barrier_rows,
-    _csc_pattern_kernel,
     _elastic_eg,
     _hard_core_eg,
     _hessian_triplets,
@@ -49,9 +49,7 @@ from .energy_kernels import (
     _line_energy,
     _line_prepare,
     _max_displacement,
-    _pattern_where,
     _same_pairs,
-    _scatter_add,
     _total_eg,
     _wall_eg,
 )

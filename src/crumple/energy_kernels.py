@@ -264,22 +264,33 @@ def _project_psd(block):
 @njit(cache=True)
 def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
                       project, project_bending=False, radius=math.inf):  # fmt: skip
+    """The exact Hessian's triplets, term by term in a fixed order (bending, stretching,
+    confinement, the cavity's wall when ``radius`` is finite, the hard core's pairs)."""
     n = pos.shape[0]
     wall = math.isfinite(radius)
     size = 36 * (n - 2) + 16 * (n - 1) + (6 if wall else 2) * n + 36 * ks.shape[0]
     rows = np.empty(size, dtype=np.int64)
     cols = np.empty(size, dtype=np.int64)
     vals = np.empty(size)
-    m = 0
+    m = _bending_triplets(pos, k_b, s, theta_p, rest, project_bending, rows, cols, vals, 0)
+    m = _stretching_triplets(pos, k_s, l0, rows, cols, vals, m)
+    m = _confinement_triplets(n, lam, weights, rows, cols, vals, m)
+    if wall:
+        m = _wall_triplets(pos, radius, width, strength, rows, cols, vals, m)
+    m = _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m)
+    return rows[:m], cols[:m], vals[:m]
+
+
+@njit(cache=True)
+def _bending_triplets(pos, k_b, s, theta_p, rest, project_bending, rows, cols, vals, m):
+    """Bending, one 6 × 6 block per joint from index m: f'' ∇θ∇θᵀ + f' ∇²θ, with
+    ∇²θ = -Hφ(a) on a = x_i - x_{i-1}, +Hφ(b) on b. Returns the next index."""
     nodes3 = np.empty(3, dtype=np.int64)
-    nodes2 = np.empty(2, dtype=np.int64)
     block6 = np.empty((6, 6))
-    block4 = np.empty((4, 4))
     g = np.empty(6)
     ha = np.empty((2, 2))
     hb = np.empty((2, 2))
-    # bending: f'' ∇θ∇θᵀ + f' ∇²θ, with ∇²θ = -Hφ(a) on a = x_i - x_{i-1}, +Hφ(b) on b
-    for i in range(1, n - 1):
+    for i in range(1, pos.shape[0] - 1):
         ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
         bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
         la2 = ax * ax + ay * ay
@@ -311,8 +322,16 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
             _project_psd(block6)
         nodes3[0], nodes3[1], nodes3[2] = i - 1, i, i + 1
         m = _put_block(rows, cols, vals, m, nodes3, block6)
-    # stretching: k_s [u uᵀ + (1 - l0/L)(I - u uᵀ)] on the segment vector
-    for i in range(n - 1):
+    return m
+
+
+@njit(cache=True)
+def _stretching_triplets(pos, k_s, l0, rows, cols, vals, m):
+    """Stretching, one 4 × 4 block per segment from index m: k_s [u uᵀ + (1 - l0/L)(I - u uᵀ)]
+    on the segment vector. Returns the next index."""
+    nodes2 = np.empty(2, dtype=np.int64)
+    block4 = np.empty((4, 4))
+    for i in range(pos.shape[0] - 1):
         ex, ey = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
         length = math.sqrt(ex * ex + ey * ey)
         ux, uy = ex / length, ey / length
@@ -329,34 +348,54 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
                 block4[2 * a + 1, 2 * b] = sgn * kxy
         nodes2[0], nodes2[1] = i, i + 1
         m = _put_block(rows, cols, vals, m, nodes2, block4)
-    # confinement: 2 λ w_i I
+    return m
+
+
+@njit(cache=True)
+def _confinement_triplets(n, lam, weights, rows, cols, vals, m):
+    """Confinement, 2 λ w_i I: two diagonal entries per node from index m. Returns the next."""
     for i in range(n):
         for u in range(2):
             rows[m] = 2 * i + u
             cols[m] = 2 * i + u
             vals[m] = 2.0 * lam * weights[i]
             m += 1
-    # cavity: ε b''/d² n nᵀ + ε b'/d ∇²δ, with δ = R_c - r, ∇δ = -n, ∇²δ = -(I - n nᵀ)/r, on
-    # each node's own 2 × 2 block (already in the pattern through the stretching blocks);
-    # every node writes its block, zeros when away from the wall, so the pattern is fixed
-    if wall:
-        for i in range(n):
-            r = math.sqrt(pos[i, 0] * pos[i, 0] + pos[i, 1] * pos[i, 1])
-            delta = radius - r
-            c2 = c1 = 0.0
-            if 0.0 < delta < width:
-                _, d1b, d2b = _barrier(delta / width)
-                c2 = strength * d2b / (width * width)
-                c1 = -strength * d1b / (width * r)  # ε b'/d × (-1/r)
-            nx, ny = (pos[i, 0] / r, pos[i, 1] / r) if r > 0.0 else (0.0, 0.0)
-            for u in range(2):
-                nu = nx if u == 0 else ny
-                for v in range(2):
-                    nv = nx if v == 0 else ny
-                    rows[m] = 2 * i + u
-                    cols[m] = 2 * i + v
-                    vals[m] = c2 * nu * nv + c1 * ((1.0 if u == v else 0.0) - nu * nv)
-                    m += 1
+    return m
+
+
+@njit(cache=True)
+def _wall_triplets(pos, radius, width, strength, rows, cols, vals, m):
+    """The cavity, a 2 × 2 block per node from index m: ε b''/d² n nᵀ + ε b'/d ∇²δ, with
+    δ = R_c - r, ∇δ = -n, ∇²δ = -(I - n nᵀ)/r, on each node's own block (already in the
+    pattern through the stretching blocks); every node writes its block, zeros when away from
+    the wall, so the pattern is fixed. Returns the next index."""
+    for i in range(pos.shape[0]):
+        r = math.sqrt(pos[i, 0] * pos[i, 0] + pos[i, 1] * pos[i, 1])
+        delta = radius - r
+        c2 = c1 = 0.0
+        if 0.0 < delta < width:
+            _, d1b, d2b = _barrier(delta / width)
+            c2 = strength * d2b / (width * width)
+            c1 = -strength * d1b / (width * r)  # ε b'/d × (-1/r)
+        nx, ny = (pos[i, 0] / r, pos[i, 1] / r) if r > 0.0 else (0.0, 0.0)
+        for u in range(2):
+            nu = nx if u == 0 else ny
+            for v in range(2):
+                nv = nx if v == 0 else ny
+                rows[m] = 2 * i + u
+                cols[m] = 2 * i + v
+                vals[m] = c2 * nu * nv + c1 * ((1.0 if u == v else 0.0) - nu * nv)
+                m += 1
+    return m
+
+
+@njit(cache=True)
+def _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m):
+    """The hard core, one 6 × 6 block per candidate pair from index m (zeros outside the core).
+    Returns the next index."""
+    nodes3 = np.empty(3, dtype=np.int64)
+    block6 = np.empty((6, 6))
+    g = np.empty(6)
     # hard core, exact: ε b''/d² ∇D∇Dᵀ + ε b'/d ∇²D. With n = (p - c)/D the unit normal and t the
     # closest-point parameter on segment (a, b), e = b - a:
     #   interior (0 < t < 1), by the envelope theorem on min_t |p - a - t e|:
@@ -420,79 +459,7 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
             # Newton on the wire's soft modes (docs/model.md)
             _project_psd(block6)
         m = _put_block(rows, cols, vals, m, nodes3, block6)
-    return rows[:m], cols[:m], vals[:m]
-
-
-@njit(cache=True)
-def _column_order(cols, ndof):
-    """The triplets grouped by column, each group in triplet order (a counting sort):
-    column c's triplets are ``order[start[c]:start[c + 1]]``."""
-    start = np.zeros(ndof + 1, dtype=np.int64)
-    for e in range(cols.shape[0]):
-        start[cols[e] + 1] += 1
-    for c in range(ndof):
-        start[c + 1] += start[c]
-    order = np.empty(cols.shape[0], dtype=np.int64)
-    fill = start[:-1].copy()
-    for e in range(cols.shape[0]):
-        order[fill[cols[e]]] = e
-        fill[cols[e]] += 1
-    return start, order
-
-
-@njit(cache=True)
-def _csc_pattern_kernel(rows, cols, ndof):
-    """CSC pattern of the triplets (rows sorted in each column, duplicates merged) and the entry
-    each triplet adds to. Per column: its distinct rows are marked in a row map, sorted (the
-    few of a chain's column by insertion, a crowded one by ``np.sort``), numbered, and each
-    triplet looks its entry up in the map. O(triplets + Σ distinct²) for a chain, far cheaper
-    than sorting the triplets themselves (each row appears ~3 times in a column)."""
-    t = rows.shape[0]
-    start, order = _column_order(cols, ndof)
-    slot = np.full(ndof, -1, dtype=np.int64)
-    buf = np.empty(ndof, dtype=np.int64)
-    indptr = np.zeros(ndof + 1, dtype=np.int64)
-    indices = np.empty(t, dtype=np.int64)
-    where = np.empty(t, dtype=np.int64)
-    nnz = 0
-    for c in range(ndof):
-        k = 0
-        for q in range(start[c], start[c + 1]):
-            r = rows[order[q]]
-            if slot[r] < 0:
-                slot[r] = 0
-                buf[k] = r
-                k += 1
-        if k > 48:
-            buf[:k] = np.sort(buf[:k])
-        else:
-            for e in range(1, k):
-                v = buf[e]
-                f = e - 1
-                while f >= 0 and buf[f] > v:
-                    buf[f + 1] = buf[f]
-                    f -= 1
-                buf[f + 1] = v
-        for e in range(k):
-            indices[nnz + e] = buf[e]
-            slot[buf[e]] = nnz + e
-        for q in range(start[c], start[c + 1]):
-            where[order[q]] = slot[rows[order[q]]]
-        for e in range(k):
-            slot[buf[e]] = -1
-        nnz += k
-        indptr[c + 1] = nnz
-    return indptr, indices[:nnz], where
-
-
-@njit(cache=True)
-def _scatter_add(where, vals, nnz):
-    """data[where[e]] += vals[e] over the triplets in order, from zeros: ``np.bincount(where,
-    weights=vals, minlength=nnz)`` bit for bit, without its checks."""
-    data = np.zeros(nnz)
-    for e in range(where.shape[0]):
-        data[where[e]] += vals[e]
-    return data
+    return m
 
 
 @njit(cache=True)
@@ -504,30 +471,6 @@ def _same_pairs(ks, js, ks0, js0):
         if ks[p] != ks0[p] or js[p] != js0[p]:
             return False
     return True
-
-
-@njit(cache=True)
-def _pattern_where(rows, cols, indptr, indices):
-    """The entry of an existing CSC pattern (rows sorted in each column) each triplet adds to,
-    through a row map of each column; ``where[0] = -1`` when some triplet has no entry in it."""
-    t = rows.shape[0]
-    ndof = indptr.shape[0] - 1
-    start, order = _column_order(cols, ndof)
-    slot = np.full(ndof, -1, dtype=np.int64)
-    where = np.empty(t, dtype=np.int64)
-    for c in range(ndof):
-        for p in range(indptr[c], indptr[c + 1]):
-            slot[indices[p]] = p
-        for q in range(start[c], start[c + 1]):
-            e = order[q]
-            w = slot[rows[e]]
-            if w < 0:
-                where[0] = -1
-                return where
-            where[e] = w
-        for p in range(indptr[c], indptr[c + 1]):
-            slot[indices[p]] = -1
-    return where
 
 
 # --------------------------------------------------------------------------------------------

@@ -29,6 +29,8 @@ import scipy.sparse as sp
 from numba import njit
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
+from .linalg_solve import _solve, _spring_solve, _unit_back_solve
+
 __all__ = ["CSC", "LDLT", "Factorization"]
 
 
@@ -149,148 +151,6 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
         d[k] = dk
         dinv[k] = 1.0 / dk if dk != 0.0 else np.inf
     return negative, modified
-
-
-@njit(cache=True)
-def _solve(n, lp, li, lx, d, perm, b):
-    """x = Pᵀ (L D Lᵀ)⁻¹ P b, with P b = b[perm]."""
-    x = np.empty(n)
-    for i in range(n):
-        x[i] = b[perm[i]]
-    for i in range(n):
-        xi = x[i]
-        for p in range(lp[i], lp[i + 1]):
-            x[li[p]] -= lx[p] * xi
-    for i in range(n):
-        x[i] /= d[i]
-    return _back_unpermute(n, lp, li, lx, perm, x, n)
-
-
-@njit(cache=True)
-def _unit_back_solve(n, lp, li, lx, perm, k):
-    """Pᵀ L⁻ᵀ e_k (back substitution from row k down)."""
-    x = np.zeros(n)
-    x[k] = 1.0
-    return _back_unpermute(n, lp, li, lx, perm, x, k)
-
-
-@njit(cache=True)
-def _back_unpermute(n, lp, li, lx, perm, x, top):
-    """Pᵀ L⁻ᵀ x in place over rows ``top - 1`` down to 0 (rows from ``top`` on are final)."""
-    for i in range(top - 1, -1, -1):
-        s = x[i]
-        for p in range(lp[i], lp[i + 1]):
-            s -= lx[p] * x[li[p]]
-        x[i] = s
-    out = np.empty(n)
-    for i in range(n):
-        out[perm[i]] = x[i]
-    return out
-
-
-@njit(cache=True)
-def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, rounds, window,
-                  max_new):  # fmt: skip
-    """Minimise gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)² given p0 = -A⁻¹g (A factored).
-
-    An active-set iteration on S, the springs the step enters. For a given S, by
-    Sherman–Morrison–Woodbury, s = p0 + A⁻¹U μ with U = [a_i]_S and
-    (K⁻¹ + UᵀA⁻¹U) μ = r_S - Uᵀp0. Each round drops the springs of S that the step no longer
-    enters (a_iᵀs >= r_i, i.e. μ_i <= 0) and adds, of those it enters, the ones it enters first
-    along s: fraction r_i / a_iᵀs within ``window`` of the first, at most ``max_new`` of them
-    in list order. A long step through a soft mode enters many springs that the first contacts
-    then keep it from, each costing a solve: measured, at most 2 per round halved the CPU of an
-    N = 1000 ramp against no limit (1 and 4 were slower than 2). Each A⁻¹a_i is one solve
-    with the factor, computed once, and only the products a_jᵀA⁻¹a_i are kept: a round costs
-    O(m |S| + |S|³). Converged when a round changes nothing: s is then the exact minimiser.
-    Returns (s, converged).
-    """
-    m, w = index.shape
-    active = np.zeros(m, dtype=np.bool_)
-    slot = np.full(m, -1, dtype=np.int64)
-    cols = np.empty((8, n))
-    g = np.empty((m, 8))  # g[j, slot[i]] = a_jᵀ A⁻¹ a_i
-    used = 0
-    base = np.empty(m)  # a_jᵀ p0
-    for j in range(m):
-        t = 0.0
-        for c in range(w):
-            t += value[j, c] * p0[index[j, c]]
-        base[j] = t
-    sel = np.empty(0, dtype=np.int64)
-    mu = np.empty(0)
-    a = np.zeros(n)
-    now = np.empty(m)  # a_jᵀ s
-    converged = False
-    for _ in range(rounds):
-        first = 2.0
-        for j in range(m):
-            t = base[j]
-            for r in range(sel.shape[0]):
-                t += g[j, slot[sel[r]]] * mu[r]
-            now[j] = t
-            if not active[j] and t < offset[j]:
-                first = min(first, offset[j] / t)
-        changed = False
-        added = 0
-        k = 0
-        for j in range(m):
-            if active[j]:
-                if now[j] >= offset[j]:
-                    active[j] = False
-                    changed = True
-            elif now[j] < offset[j] and offset[j] / now[j] <= first + window and added < max_new:
-                active[j] = True
-                changed = True
-                added += 1
-            if active[j]:
-                k += 1
-        if not changed:
-            converged = True
-            break
-        sel = np.empty(k, dtype=np.int64)
-        k = 0
-        for i in range(m):
-            if not active[i]:
-                continue
-            sel[k] = i
-            k += 1
-            if slot[i] >= 0:
-                continue
-            if used == cols.shape[0]:
-                bigger = np.empty((2 * used, n))
-                bigger[:used] = cols[:used]
-                cols = bigger
-                wider = np.empty((m, 2 * used))
-                wider[:, :used] = g[:, :used]
-                g = wider
-            for c in range(w):
-                a[index[i, c]] += value[i, c]
-            col = _solve(n, lp, li, lx, d, perm, a)
-            for c in range(w):
-                a[index[i, c]] = 0.0
-            cols[used] = col
-            for j in range(m):
-                t = 0.0
-                for c in range(w):
-                    t += value[j, c] * col[index[j, c]]
-                g[j, used] = t
-            slot[i] = used
-            used += 1
-        mat = np.empty((k, k))
-        rhs = np.empty(k)
-        for r in range(k):
-            rhs[r] = offset[sel[r]] - base[sel[r]]
-            for q in range(k):
-                mat[r, q] = 0.5 * (g[sel[r], slot[sel[q]]] + g[sel[q], slot[sel[r]]])
-            mat[r, r] += 1.0 / stiff[sel[r]]
-        mu = np.linalg.solve(mat, rhs) if k > 0 else rhs
-    s = p0.copy()
-    for r in range(sel.shape[0]):
-        col = cols[slot[sel[r]]]
-        for e in range(n):
-            s[e] += mu[r] * col[e]
-    return s, converged
 
 
 @njit(cache=True)
@@ -515,7 +375,7 @@ class Factorization:
         ``(s, converged)``: converged when the active set {i: a_iᵀs < r_i} was found within
         ``rounds`` rounds (springs are added in the order the step enters them, those within
         ``window`` of the first together, at most ``max_new`` per round; see
-        ``_spring_solve``).
+        :func:`crumple.linalg_solve._spring_solve`).
 
         >>> f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
         >>> s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0]]), np.array([[-1.0]]),

@@ -184,56 +184,75 @@ def newton(
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
-    escapes = 0
-    unstable = False
     while True:
         if st.fmax <= max(ftol, st.fres):
             h = hess(st.x)
             st.nhev += 1
             st.fres = _force_resolution(h, st.x)
         if st.fmax <= max(ftol, st.fres):
-            check = ldl.factorize(h, shift=floor)
-            modes = _modes(zero_modes, st.x, m)
-            if _negative_count(check, modes) == 0:
-                message = f"converged: max force {st.fmax:.3g} <= {ftol:.3g}"
-                if st.fmax > ftol:
-                    message = (
-                        f"converged to the force resolution: max force {st.fmax:.3g} <= "
-                        f"{st.fres:.3g}, the force change of a one-ulp move ({ftol:.3g} is "
-                        "below what float64 positions resolve)"
-                    )
+            stop = _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes,
+                                step_limit, feasible)  # fmt: skip
+            if stop is not None:
+                message = stop
                 break
-            if escapes >= max_escapes:
-                unstable = True
-                message = f"stopped at an unstable equilibrium after {escapes} escapes"
-                break
-            if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible):
-                unstable = True
-                message = "stopped at an equilibrium with negative curvature that no step lowers"
-                break
-            escapes += 1
             if callback is not None:
                 callback(st.it, st.x, st.e, st.fmax)
             continue
         if st.it >= maxiter:
             break
-        st.it += 1
-        p = _direction(st, hess, hess_fallback, ldl, floor, m)
-        if barriers is not None:
-            p = _barrier_step(st, p, barriers)
-        if mask is not None:  # zero already in exact arithmetic; made exact in floating point
-            p.reshape(-1)[mask] = 0.0
-        if not np.isfinite(p).all():
-            message = "could not make the Hessian positive definite (non-finite factor)"
-            break
-        failure = _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step)
+        failure = _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit,
+                               feasible, armijo, max_backtracks, max_step)  # fmt: skip
         if failure:
             message = failure
             break
         if callback is not None:
             callback(st.it, st.x, st.e, st.fmax)
-    if escapes and not unstable:
-        message += f" ({escapes} saddle escape{'s' if escapes > 1 else ''})"
+    return _result(st, ldl, ftol, message)
+
+
+def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_limit, feasible):
+    """At a point where the forces vanish (H = ``h``): the stop message if it is a minimum
+    (H + τM positive definite off the zero modes) or if no escape is left or possible, else
+    None after one escape step downhill along the lowest mode (``st`` moved, counted)."""
+    check = ldl.factorize(h, shift=floor)
+    modes = _modes(zero_modes, st.x, m)
+    if _negative_count(check, modes) == 0:
+        if st.fmax > ftol:
+            return (
+                f"converged to the force resolution: max force {st.fmax:.3g} <= "
+                f"{st.fres:.3g}, the force change of a one-ulp move ({ftol:.3g} is "
+                "below what float64 positions resolve)"
+            )
+        return f"converged: max force {st.fmax:.3g} <= {ftol:.3g}"
+    if st.escapes >= max_escapes:
+        st.unstable = True
+        return f"stopped at an unstable equilibrium after {st.escapes} escapes"
+    if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible):
+        st.unstable = True
+        return "stopped at an equilibrium with negative curvature that no step lowers"
+    st.escapes += 1
+    return None
+
+
+def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit, feasible,
+                 armijo, max_backtracks, max_step):  # fmt: skip
+    """One Newton iteration: the direction (with the barriers' springs, zero on the fixed
+    entries) and its line search; ``st`` updated; None, or why the iteration failed."""
+    st.it += 1
+    p = _direction(st, hess, hess_fallback, ldl, floor, m)
+    if barriers is not None:
+        p = _barrier_step(st, p, barriers)
+    if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
+        p.reshape(-1)[st.mask] = 0.0
+    if not np.isfinite(p).all():
+        return "could not make the Hessian positive definite (non-finite factor)"
+    return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step)
+
+
+def _result(st, ldl, ftol, message) -> MinimizeResult:
+    """The result of :func:`newton` from its final state and stop message."""
+    if st.escapes and not st.unstable:
+        message += f" ({st.escapes} saddle escape{'s' if st.escapes > 1 else ''})"
     return MinimizeResult(
         x=st.x,
         energy=st.e,
@@ -241,7 +260,7 @@ def newton(
         iterations=st.it,
         evaluations=st.nfev,
         hessian_evaluations=st.nhev,
-        converged=st.fmax <= max(ftol, st.fres) and not unstable,
+        converged=st.fmax <= max(ftol, st.fres) and not st.unstable,
         ftol=ftol,
         message=message,
         method="newton",
@@ -319,6 +338,8 @@ class _State:
     sigma: float = 0.0
     mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
     factor: object = None  # the factor the last direction was solved with
+    escapes: int = 0  # saddle escapes taken
+    unstable: bool = False  # stopped at an equilibrium that is not a minimum
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:

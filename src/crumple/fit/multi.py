@@ -192,6 +192,40 @@ def collapse(
     if reference not in curves:
         raise ValueError(f"reference {reference!r} is not one of the curve keys {list(curves)}")
     keys = list(curves)
+    log_g, data, n_total = _log_curves(curves, keys, x_range)
+    ly_all = np.concatenate([data[k][1] for k in keys])
+    ii, j0, j1, t, d = _comparisons(keys, log_g, data)
+    u = ly_all[ii] - (1.0 - t) * ly_all[j0] - t * ly_all[j1]
+    dd = float(d @ d)
+    if not dd > 0:
+        raise ValueError("the overlapping curves all share one g; c cannot be fitted")
+    c = float(d @ u) / dd
+    r = u - c * d
+    noise, stderr, dof = _shift_error(r, ii, j0, j1, t, d, dd, n_total)
+    q = stats.t.ppf(0.5 + 0.5 * confidence, dof)
+    rescaled, xcat, ycat = _rescale(keys, log_g, data, c, log_g[reference], ii, j0, j1, n_total)
+    master = fit_power_law(xcat, ycat, confidence=confidence)
+    return CollapseFit(
+        exponent=c,
+        stderr=stderr,
+        ci=(c - q * stderr, c + q * stderr),
+        confidence=confidence,
+        scatter=float(np.sqrt(np.mean(r**2))),
+        scatter_uncollapsed=float(np.sqrt(np.mean(u**2))),
+        noise=noise,
+        reference=reference if isinstance(reference, tuple) else (reference,),
+        n_curves=len(keys),
+        n_pairs=int(r.shape[0]),
+        x_range=(float(xcat.min()), float(xcat.max())),
+        master=master,
+        rescaled=MappingProxyType(rescaled),
+    )
+
+
+def _log_curves(curves, keys, x_range):
+    """Every curve checked, cut to ``x_range`` and sorted in x, in logarithms: ``ln g`` by key,
+    ``(ln x, ln y, offset)`` by key (offset: where its points start in the concatenation of
+    all curves), and the number of points."""
     log_g = {}
     data = {}
     offset = 0
@@ -215,9 +249,13 @@ def collapse(
         offset += lx.shape[0]
     if len({round(v, 12) for v in log_g.values()}) < 2:
         raise ValueError("all curves have the same scaling variable g; c cannot be fitted")
-    n_total = offset
-    ly_all = np.concatenate([data[k][1] for k in keys])
-    # Each comparison: (coefficient vector over all points as sparse (index, weight)), shift D
+    return log_g, data, offset
+
+
+def _comparisons(keys, log_g, data):
+    """Every point x_m of every curve i inside the x range of another curve j, compared with
+    j interpolated there in ln x: the point's index ``ii``, j's bracketing points ``j0``,
+    ``j1`` and interpolation weight ``t`` (on j1), and the shift ``d = ln g_i - ln g_j``."""
     rows_i: list[np.ndarray] = []
     rows_j0: list[np.ndarray] = []
     rows_j1: list[np.ndarray] = []
@@ -243,14 +281,12 @@ def collapse(
     if not shifts:
         raise ValueError("no two curves overlap in x; a collapse cannot be measured")
     ii, j0, j1 = (np.concatenate(a) for a in (rows_i, rows_j0, rows_j1))
-    t = np.concatenate(w_j1)
-    d = np.concatenate(shifts)
-    u = ly_all[ii] - (1.0 - t) * ly_all[j0] - t * ly_all[j1]
-    dd = float(d @ d)
-    if not dd > 0:
-        raise ValueError("the overlapping curves all share one g; c cannot be fitted")
-    c = float(d @ u) / dd
-    r = u - c * d
+    return ii, j0, j1, np.concatenate(w_j1), np.concatenate(shifts)
+
+
+def _shift_error(r, ii, j0, j1, t, d, dd, n_total):
+    """The noise σ on ln y estimated from the residuals r, the standard error σ |w| of
+    c = Σ_p w_p ln y_p, and the degrees of freedom of its interval."""
     # c = sum_p g_p ln y_p: accumulate the weight of each data point
     gvec = np.zeros(n_total)
     np.add.at(gvec, ii, d / dd)
@@ -262,8 +298,12 @@ def collapse(
     dof = max(1, n_used - 2)
     noise = math.sqrt(float(np.sum(r**2 / var_factor)) / max(1, n_terms - 1))
     stderr = noise * math.sqrt(float(gvec @ gvec))
-    q = stats.t.ppf(0.5 + 0.5 * confidence, dof)
-    ref_log_g = log_g[reference]
+    return noise, stderr, dof
+
+
+def _rescale(keys, log_g, data, c, ref_log_g, ii, j0, j1, n_total):
+    """The points used by some comparison, rescaled onto the reference curve: (x, y) by key
+    (read-only arrays), and all of them concatenated in key order."""
     rescaled = {}
     all_x, all_y = [], []
     used = np.zeros(n_total, dtype=bool)
@@ -280,20 +320,4 @@ def collapse(
         rescaled[key] = (xx, yy)
         all_x.append(xx)
         all_y.append(yy)
-    xcat = np.concatenate(all_x)
-    master = fit_power_law(xcat, np.concatenate(all_y), confidence=confidence)
-    return CollapseFit(
-        exponent=c,
-        stderr=stderr,
-        ci=(c - q * stderr, c + q * stderr),
-        confidence=confidence,
-        scatter=float(np.sqrt(np.mean(r**2))),
-        scatter_uncollapsed=float(np.sqrt(np.mean(u**2))),
-        noise=noise,
-        reference=reference if isinstance(reference, tuple) else (reference,),
-        n_curves=len(keys),
-        n_pairs=int(n_terms),
-        x_range=(float(xcat.min()), float(xcat.max())),
-        master=master,
-        rescaled=MappingProxyType(rescaled),
-    )
+    return rescaled, np.concatenate(all_x), np.concatenate(all_y)

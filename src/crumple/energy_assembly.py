@@ -1,0 +1,109 @@
+"""The fixed-pattern assembly of Hessian triplets into a CSC matrix (Numba kernels).
+
+Private: :class:`crumple.energy.WireEnergy` finds the CSC pattern of its triplets once per
+neighbour list (rows sorted in each column, duplicates merged) and the entry each triplet adds
+to, then assembles every Hessian by one scatter-add into that pattern. Nothing here knows what
+a wire is. Split from ``energy_kernels.py`` (the terms' kernels), which stays one readable
+module.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _column_order(cols, ndof):
+    """The triplets grouped by column, each group in triplet order (a counting sort):
+    column c's triplets are ``order[start[c]:start[c + 1]]``."""
+    start = np.zeros(ndof + 1, dtype=np.int64)
+    for e in range(cols.shape[0]):
+        start[cols[e] + 1] += 1
+    for c in range(ndof):
+        start[c + 1] += start[c]
+    order = np.empty(cols.shape[0], dtype=np.int64)
+    fill = start[:-1].copy()
+    for e in range(cols.shape[0]):
+        order[fill[cols[e]]] = e
+        fill[cols[e]] += 1
+    return start, order
+
+
+@njit(cache=True)
+def _csc_pattern_kernel(rows, cols, ndof):
+    """CSC pattern of the triplets (rows sorted in each column, duplicates merged) and the entry
+    each triplet adds to. Per column: its distinct rows are marked in a row map, sorted (the
+    few of a chain's column by insertion, a crowded one by ``np.sort``), numbered, and each
+    triplet looks its entry up in the map. O(triplets + Σ distinct²) for a chain, far cheaper
+    than sorting the triplets themselves (each row appears ~3 times in a column)."""
+    t = rows.shape[0]
+    start, order = _column_order(cols, ndof)
+    slot = np.full(ndof, -1, dtype=np.int64)
+    buf = np.empty(ndof, dtype=np.int64)
+    indptr = np.zeros(ndof + 1, dtype=np.int64)
+    indices = np.empty(t, dtype=np.int64)
+    where = np.empty(t, dtype=np.int64)
+    nnz = 0
+    for c in range(ndof):
+        k = 0
+        for q in range(start[c], start[c + 1]):
+            r = rows[order[q]]
+            if slot[r] < 0:
+                slot[r] = 0
+                buf[k] = r
+                k += 1
+        if k > 48:
+            buf[:k] = np.sort(buf[:k])
+        else:
+            for e in range(1, k):
+                v = buf[e]
+                f = e - 1
+                while f >= 0 and buf[f] > v:
+                    buf[f + 1] = buf[f]
+                    f -= 1
+                buf[f + 1] = v
+        for e in range(k):
+            indices[nnz + e] = buf[e]
+            slot[buf[e]] = nnz + e
+        for q in range(start[c], start[c + 1]):
+            where[order[q]] = slot[rows[order[q]]]
+        for e in range(k):
+            slot[buf[e]] = -1
+        nnz += k
+        indptr[c + 1] = nnz
+    return indptr, indices[:nnz], where
+
+
+@njit(cache=True)
+def _scatter_add(where, vals, nnz):
+    """data[where[e]] += vals[e] over the triplets in order, from zeros: ``np.bincount(where,
+    weights=vals, minlength=nnz)`` bit for bit, without its checks."""
+    data = np.zeros(nnz)
+    for e in range(where.shape[0]):
+        data[where[e]] += vals[e]
+    return data
+
+
+@njit(cache=True)
+def _pattern_where(rows, cols, indptr, indices):
+    """The entry of an existing CSC pattern (rows sorted in each column) each triplet adds to,
+    through a row map of each column; ``where[0] = -1`` when some triplet has no entry in it."""
+    t = rows.shape[0]
+    ndof = indptr.shape[0] - 1
+    start, order = _column_order(cols, ndof)
+    slot = np.full(ndof, -1, dtype=np.int64)
+    where = np.empty(t, dtype=np.int64)
+    for c in range(ndof):
+        for p in range(indptr[c], indptr[c + 1]):
+            slot[indices[p]] = p
+        for q in range(start[c], start[c + 1]):
+            e = order[q]
+            w = slot[rows[e]]
+            if w < 0:
+                where[0] = -1
+                return where
+            where[e] = w
+        for p in range(indptr[c], indptr[c + 1]):
+            slot[indices[p]] = -1
+    return where
