@@ -93,9 +93,10 @@ def test_sigint_keeps_finished_replicas(tmp_path):
     import h5py
 
     # replica 0 of a fast ramp finishes; the in-process loop is then stopped in replica 1
+    # (a ramp takes ~0.6 s: 8 replicas leave seconds for the signal to arrive before the end)
     proc = subprocess.Popen(
         [sys.executable, "-m", "crumple.cli", "run", "--out", str(tmp_path / "o"),
-         "--replicas", "3", "--workers", "1", "--n-segments", "100"],
+         "--replicas", "8", "--workers", "1", "--n-segments", "100"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )  # fmt: skip
     err = ""
@@ -109,7 +110,7 @@ def test_sigint_keeps_finished_replicas(tmp_path):
     _, rest = proc.communicate(timeout=30)
     err += rest
     assert proc.returncode == 130, err
-    assert "kept the 1 finished replica(s) of 3" in err, err
+    assert "kept the 1 finished replica(s) of 8" in err, err
     with h5py.File(tmp_path / "o" / "ramps.interrupted.h5") as f:
         assert f["positions"].shape[0] == 1
         assert json.loads(f.attrs["interrupted"]) is True
