@@ -36,10 +36,12 @@ def test_compare_row_verdicts():
     # no verdict without a σ: one replica, or integer counts equal in every replica
     one = Estimate(2.0, 0.0, 1)
     assert _compare_row("k", "q", one, Estimate(3.0, 0.0, 1), "", "1")["verdict"].startswith(
-        "σ unknown (1 replica)")
+        "σ unknown (1 replica)"
+    )
     same = Estimate(2.0, 0.0, 6)
     assert _compare_row("k", "q", same, Estimate(3.0, 0.0, 6), "", "6")["verdict"].startswith(
-        "σ = 0 (identical replicas)")
+        "σ = 0 (identical replicas)"
+    )
     assert _compare_row("k", "q", same, b, "", "6")["verdict"] == "differs"
 
 

@@ -237,8 +237,9 @@ def _checked_injector(checks: list):
     angle=st.floats(-1.0, 1.0),
     seed=st.integers(0, 2**16),
 )
-def test_injection_never_leaves_the_cavity_nor_crosses(n, radius, push_segments,
-                                                       stop_segments, plastic, angle, seed):
+def test_injection_never_leaves_the_cavity_nor_crosses(
+    n, radius, push_segments, stop_segments, plastic, angle, seed
+):
     """Checked after every move, release and relaxation, up to a stop length of L - a (φ up
     to 0.12 at R_c = 0.05), with plasticity and entry angles up to ±1 rad."""
     wire = small_wire(n, cavity_radius=radius, hard_core=radius / 50,
@@ -447,8 +448,10 @@ def test_work_of_the_feed_force_is_the_stored_energy_on_the_default_protocol():
     rel = np.array([s.released for s in res.stages])
     assert np.all(rel[1:] >= 1)  # releases included: the default protocol, not a quiet stretch
     lengths = np.concatenate([[0.0], res.injected_lengths])
-    stored = res.energies()["total"][-1] - FedWireEnergy(
-        wire, np.zeros(wire.n_nodes, dtype=bool))(res.initial)[0]
+    stored = (
+        res.energies()["total"][-1]
+        - FedWireEnergy(wire, np.zeros(wire.n_nodes, dtype=bool))(res.initial)[0]
+    )
     work = float(np.sum(res.feed_forces * np.diff(lengths)))
     assert stored > 0
     # the remainder: ∫F dL over contact events, where F has kinks (2.5 % here)

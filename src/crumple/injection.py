@@ -442,9 +442,14 @@ class _Injector:
             if left <= 0.0:
                 return "", work, res, bad
         return (
-            f"the push is blocked at the mouth at L_in = {self.injected:.6g}: the channel's "
-            f"nodes kept touching the wire inside ({MAX_BLOCKED} partial pushes)"
-        ), work, None, bad
+            (
+                f"the push is blocked at the mouth at L_in = {self.injected:.6g}: the channel's "
+                f"nodes kept touching the wire inside ({MAX_BLOCKED} partial pushes)"
+            ),
+            work,
+            None,
+            bad,
+        )
 
     def _release(self) -> int:
         """Free the prescribed nodes that are at least the release depth in; kick them."""

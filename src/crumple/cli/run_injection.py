@@ -54,6 +54,8 @@ def reject_injection_flags(args) -> None:
             f"{', '.join(given)}: injection flag(s), not a ramp's (set kind = 'injection' in "
             "the [protocol] table, or --protocol injection)"
         )
+
+
 _RUN_KEYS = ("replicas", "seed", "out", "overwrite", "figure_lengths")
 
 
