@@ -233,6 +233,31 @@ def test_stable_minimum_with_a_zero_mode_is_accepted():
     assert "escape" not in r.message
 
 
+def test_a_zero_mode_with_negative_curvature_keeps_newton_quadratic():
+    """Inside the ring of minima of a rotation-invariant f(|x|) the Hessian's only negative
+    direction is the rotation (curvature -gᵀ(d²x/dθ²) < 0). Given the zero mode, the step
+    fixes its gauge instead of damping the whole step, and the force falls quadratically."""
+
+    def f(x):
+        r2 = float(x @ x)
+        return 0.25 * (r2 - 1.0) ** 2, (r2 - 1.0) * x
+
+    def h(x):
+        return (float(x @ x) - 1.0) * np.eye(2) + 2 * np.outer(x, x)
+
+    x0 = np.array([0.7, 0.1])
+    assert np.linalg.eigvalsh(h(x0))[0] < 0  # indefinite, along the rotation only
+    forces = []
+    r = newton(f, x0, hess=h, ftol=1e-12, zero_modes=lambda x: np.array([[-x[1], x[0]]]),
+               callback=lambda it, x, e, fmax: forces.append(fmax))  # fmt: skip
+    assert r.converged, r.message
+    assert np.hypot(*r.x) == pytest.approx(1.0, rel=1e-12)
+    big = [k for k, fk in enumerate(forces) if fk > 1e-6]
+    for k in big[1:]:  # quadratic: f_{k+1} <= C f_k^2 once close
+        assert forces[k + 1] <= 10 * forces[k] ** 2, forces
+    assert r.iterations <= 6, forces
+
+
 # --------------------------------------------------------------------------------------------
 # Newton: step control and admissibility hooks
 # --------------------------------------------------------------------------------------------

@@ -70,8 +70,13 @@ def newton(
     **About one factorisation per iteration.** Each iteration factorises the exact Hessian H
     by a sparse LDLᵀ (:class:`crumple.linalg.LDLT`, symbolic analysis reused). Where it is
     positive definite (every pivot above ``curvature_tol × metric``) this is Newton's step.
-    Where it is not, the step is that of ``hess_fallback`` (a positive definite approximation),
-    and the next few iterations use the fallback directly before trying H again. Without a
+    With ``zero_modes``, an H that is not is factorised once more with the zero modes' gauge
+    fixed (one diagonal entry per mode raised, :func:`_gauge_pin`): away from equilibrium a
+    symmetry's mode can have negative curvature that means nothing (a rigid rotation, when the
+    forces have an outward moment), and the step need not move along it. Where H is still
+    not positive definite, the step is that of ``hess_fallback`` (a positive definite
+    approximation, with the same gauge), and the next few iterations use the fallback
+    directly before trying H again. Without a
     fallback, the pivots below the floor are raised as the factorisation goes (modified LDLᵀ).
 
     **Trust radius in the units of x.** No row moves further than a radius Δ per step: Δ starts
@@ -128,8 +133,9 @@ def newton(
         the eigenvalues of (H, M) are those of the continuum and independent of n. Default 1.
     zero_modes : callable, optional
         ``zero_modes(x) -> array (k, x.size)``: directions along which the energy is invariant
-        (a rigid rotation about the centre of an isotropic trap). The stability test and the
-        escape work in their M-orthogonal complement: such a mode's curvature is zero in
+        (a rigid rotation about the centre of an isotropic trap). The steps fix their gauge
+        where H is indefinite (above). The stability test and the escape work in their
+        M-orthogonal complement: such a mode's curvature is zero in
         exact arithmetic but only zero to round-off in H, which at large n exceeds any useful
         τ (measured: -0.06 per unit length for the rotation of a straight wire at N = 10⁴).
         Inertia of H + τM restricted to the complement: neg(H + τM) - neg(Wᵀ(H + τM)⁻¹W).
@@ -181,6 +187,7 @@ def newton(
         raise ValueError(f"the energy at the starting point is {e}")
     st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
     st.radius = math.inf if max_step is None else float(max_step)
+    st.zero_modes, st.gauge = zero_modes, _gauge_entries(zero_modes, x)
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -338,6 +345,8 @@ class _State:
     sigma: float = 0.0
     mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
     factor: object = None  # the factor the last direction was solved with
+    zero_modes: Callable | None = None
+    gauge: np.ndarray | None = None  # (mode, entry of x.ravel()) pairs that pin the gauge
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
 
@@ -361,6 +370,8 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         h = hess(st.x)
         st.fres = _force_resolution(h, st.x)
         f = ldl.factorize(h, floor=floor)
+        if f.modified and st.gauge is not None:  # indefinite along a zero mode only?
+            f = ldl.factorize(h, shift=_gauge_pin(h, st.gauge, st.zero_modes(st.x)), floor=floor)
         if f.modified == 0:
             st.skip = 0
             st.factor = f
@@ -371,19 +382,58 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
     st.nhev += 1
     hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
+    pin = 0.0 if st.gauge is None else _gauge_pin(hs, st.gauge, st.zero_modes(st.x))
     sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
     for _ in range(60):
-        f = ldl.factorize(hs, shift=sigma * m, floor=floor)
+        f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor)
         if f.modified == 0:
             st.sigma = sigma
             st.factor = f
             return -f.solve(g).reshape(st.x.shape)
         v = f.negative_direction()
-        mu = float(v @ (hs @ v)) / float(v @ (m * v)) if v is not None else 0.0
+        mu = float(v @ (hs @ v) + v @ (pin * v)) / float(v @ (m * v)) if v is not None else 0.0
         sigma = max(2.0 * sigma, -2.0 * mu, floor[0] / m[0])
     st.sigma = sigma
     st.factor = f
     return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
+
+
+def _gauge_entries(zero_modes, x) -> np.ndarray | None:
+    """Where to fix the gauge of the zero modes: (mode, entry of ``x.ravel()``) pairs, the entry
+    where the mode is largest, the entries of the modes before it excluded. None without."""
+    if zero_modes is None:
+        return None
+    w = np.abs(np.asarray(zero_modes(x), dtype=np.float64).reshape(-1, x.size))
+    pairs: list[tuple[int, int]] = []
+    for k, mode in enumerate(w):
+        mode[[j for _, j in pairs]] = 0.0
+        if np.max(mode, initial=0.0) > 0:
+            pairs.append((k, int(np.argmax(mode))))
+    return np.array(pairs, dtype=np.int64) if pairs else None
+
+
+def _gauge_pin(h, gauge, modes) -> np.ndarray:
+    """The gauge shift: c_j on the entry j of each (mode, j) pair of ``gauge``, 0 elsewhere.
+
+    A zero mode w of the energy (a rigid rotation) is not a zero mode of its Hessian away from
+    equilibrium: its curvature there is -gᵀ(d²x/dθ²), negative whenever the forces have an
+    outward moment, which makes an exact Hessian indefinite for no physical reason (measured:
+    the lowest mode of the default ramp's contact stages, overlap 0.96–1.0 with the rotation).
+    Adding c_j e_j e_jᵀ on an entry where w_j ≠ 0 leaves the model unchanged in the complement
+    {s: s_j = 0} of w, a choice of gauge (the energy does not depend on the rotation, so the
+    step need not either), and gives w the curvature wᵀHw + c_j w_j². c_j = max(|H_jj|,
+    -2 wᵀHw / w_j²): the scale of H, and at least enough to make w's curvature positive.
+    """
+    hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
+    w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
+    pin = np.zeros(hs.shape[0])
+    for k, j in gauge:
+        mode = w[k]
+        lo, hi = hs.indptr[j], hs.indptr[j + 1]
+        at = lo + int(np.searchsorted(hs.indices[lo:hi], j))
+        hjj = abs(float(hs.data[at])) if at < hi and hs.indices[at] == j else 0.0
+        pin[j] = max(hjj, -2.0 * float(mode @ (hs @ mode)) / mode[j] ** 2)
+    return pin
 
 
 def _barrier_step(st, p, barriers) -> np.ndarray:
