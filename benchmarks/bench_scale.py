@@ -7,6 +7,7 @@
     python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
     python benchmarks/bench_scale.py compare         # stage energies, new vs landed
     python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
+    python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -216,6 +217,64 @@ def bench_compare():
                   f"new lower at {sum(a < b for _, a, b in differ)} of them")  # fmt: skip
 
 
+def bench_gauge(ns=()):
+    """Default-schedule ramps with the zero modes' gauge in the Newton step (the engine) and
+    without it (``minimize._gauge_entries`` returning None: the engine before 4483c13, bit
+    for bit), in one process: N = 100 (k_b = 5, k_s = 5e5) seeds 0-2, then the continuum wire
+    at each N given (seed 0). And where it matters: the lowest mode of the Hessian in the
+    middle of N = 100's λ = 917 stage against the rotation about the trap's centre."""
+    import crumple.minimize as minimize_module
+
+    on = minimize_module._gauge_entries
+    run_ramp(Wire(k_b=5, k_s=5e5, n_segments=10), seed=0)  # compilation out of the timings
+    print("== the rotation's gauge in the Newton step: on (engine) vs off (before 4483c13) ==")
+    cases = [(Wire(k_b=5, k_s=5e5), s, "N = 100 default") for s in (0, 1, 2)]
+    cases += [(continuum_wire(n), 0, f"N = {n} continuum") for n in ns]
+    for wire, seed, label in cases:
+        out = []
+        for name, entries in (("on", on), ("off", lambda zero_modes, x: None)):
+            minimize_module._gauge_entries = entries
+            try:
+                r, t = cpu(lambda w=wire, s=seed: run_ramp(w, seed=s))
+            finally:
+                minimize_module._gauge_entries = on
+            its = sum(s.result.iterations for s in r.stages)
+            fac = sum(s.result.factorizations for s in r.stages)
+            ok = sum(s.result.converged for s in r.stages)
+            out.append(f"{name}: {its} its, {fac} factorisations, {t:.2f} s, {ok}/{len(r.stages)}")
+        print(f"  {label}, seed {seed}: " + " | ".join(out), flush=True)
+    _gauge_overlap()
+
+
+def _gauge_overlap():
+    """The lowest eigenvectors (per length, dense) of the exact and contacts-projected Hessians
+    halfway through the N = 100 λ = 917 stage, without the gauge, against the rotation."""
+    import crumple.minimize as minimize_module
+    from crumple.protocol import node_lengths
+
+    wire = Wire(k_b=5, k_s=5e5)
+    stages = run_ramp(wire, Ramp(lambdas=default_schedule()[:38]), seed=0).stages
+    lam = default_schedule()[38]
+    on = minimize_module._gauge_entries
+    minimize_module._gauge_entries = lambda zero_modes, x: None
+    try:
+        x = minimize_wire(wire, stages[-1].positions, lam, maxiter=50).x
+    finally:
+        minimize_module._gauge_entries = on
+    m = np.repeat(node_lengths(wire), 2)
+    e = WireEnergy(wire, lam)
+    rot = np.column_stack([-x[:, 1], x[:, 0]]).ravel()
+    for name, kw in (("exact", {}), ("contacts projected", {"project_contacts": True})):
+        h = e.hessian_csc(x, **kw).tocsc().toarray() / np.sqrt(np.outer(m, m))
+        vals, vecs = np.linalg.eigh(0.5 * (h + h.T))
+        v = vecs[:, 0] / np.sqrt(m)
+        overlap = abs(v @ (m * rot)) / np.sqrt((v @ (m * v)) * (rot @ (m * rot)))
+        print(
+            f"  λ = {lam:.4g}, after 50 iterations without the gauge, {name} Hessian: lowest "
+            f"eigenvalue {vals[0]:.3g} per length, overlap with the rotation {overlap:.3f}"
+        )
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -232,5 +291,7 @@ if __name__ == "__main__":
         bench_compare()
     elif what == "contacts":
         bench_contacts([int(v) for v in sys.argv[2:]])
+    elif what == "gauge":
+        bench_gauge([int(v) for v in sys.argv[2:]])
     else:
         raise SystemExit(__doc__)

@@ -29,10 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .linalg import CSC, LDLT
-from .minimize_result import MinimizeResult, _row_norms, _validate_common, max_force
+from .minimize_modes import _escape, _gauge_entries, _gauge_pin, _modes, _negative_count
+from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
@@ -71,13 +71,13 @@ def newton(
     by a sparse LDLᵀ (:class:`crumple.linalg.LDLT`, symbolic analysis reused). Where it is
     positive definite (every pivot above ``curvature_tol × metric``) this is Newton's step.
     With ``zero_modes``, an H that is not is factorised once more with the zero modes' gauge
-    fixed (one diagonal entry per mode raised, :func:`_gauge_pin`): away from equilibrium a
-    symmetry's mode can have negative curvature that means nothing (a rigid rotation, when the
-    forces have an outward moment), and the step need not move along it. Where H is still
-    not positive definite, the step is that of ``hess_fallback`` (a positive definite
-    approximation, with the same gauge), and the next few iterations use the fallback
-    directly before trying H again. Without a
-    fallback, the pivots below the floor are raised as the factorisation goes (modified LDLᵀ).
+    fixed (one diagonal entry per mode raised, ``minimize_modes._gauge_pin``): away from
+    equilibrium a symmetry's mode can have negative curvature that means nothing (a rigid
+    rotation, when the forces have an outward moment), and the step need not move along it.
+    Where H is still not positive definite, the step is that of ``hess_fallback`` (a positive
+    definite approximation, with the same gauge), and the next few iterations use the
+    fallback directly before trying H again. Without a fallback, the pivots below the floor
+    are raised as the factorisation goes (modified LDLᵀ).
 
     **Trust radius in the units of x.** No row moves further than a radius Δ per step: Δ starts
     at ``max_step``, shrinks to the displacement that was accepted when the line search had
@@ -398,44 +398,6 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
 
 
-def _gauge_entries(zero_modes, x) -> np.ndarray | None:
-    """Where to fix the gauge of the zero modes: (mode, entry of ``x.ravel()``) pairs, the entry
-    where the mode is largest, the entries of the modes before it excluded. None without."""
-    if zero_modes is None:
-        return None
-    w = np.abs(np.asarray(zero_modes(x), dtype=np.float64).reshape(-1, x.size))
-    pairs: list[tuple[int, int]] = []
-    for k, mode in enumerate(w):
-        mode[[j for _, j in pairs]] = 0.0
-        if np.max(mode, initial=0.0) > 0:
-            pairs.append((k, int(np.argmax(mode))))
-    return np.array(pairs, dtype=np.int64) if pairs else None
-
-
-def _gauge_pin(h, gauge, modes) -> np.ndarray:
-    """The gauge shift: c_j on the entry j of each (mode, j) pair of ``gauge``, 0 elsewhere.
-
-    A zero mode w of the energy (a rigid rotation) is not a zero mode of its Hessian away from
-    equilibrium: its curvature there is -gᵀ(d²x/dθ²), negative whenever the forces have an
-    outward moment, which makes an exact Hessian indefinite for no physical reason (measured:
-    the lowest mode of the default ramp's contact stages, overlap 0.96–1.0 with the rotation).
-    Adding c_j e_j e_jᵀ on an entry where w_j ≠ 0 leaves the model unchanged in the complement
-    {s: s_j = 0} of w, a choice of gauge (the energy does not depend on the rotation, so the
-    step need not either), and gives w the curvature wᵀHw + c_j w_j². c_j = max(|H_jj|,
-    -2 wᵀHw / w_j²): the scale of H, and at least enough to make w's curvature positive.
-    """
-    hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
-    w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
-    pin = np.zeros(hs.shape[0])
-    for k, j in gauge:
-        mode = w[k]
-        lo, hi = hs.indptr[j], hs.indptr[j + 1]
-        at = lo + int(np.searchsorted(hs.indices[lo:hi], j))
-        hjj = abs(float(hs.data[at])) if at < hi and hs.indices[at] == j else 0.0
-        pin[j] = max(hjj, -2.0 * float(mode @ (hs @ mode)) / mode[j] ** 2)
-    return pin
-
-
 def _barrier_step(st, p, barriers) -> np.ndarray:
     """The step of the model with the one-sided springs of ``barriers`` added.
 
@@ -525,101 +487,6 @@ def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_s
         st.radius = min(max(st.radius, RADIUS_GROW * moved), max_step)
     st.x, st.e, st.g, st.fmax = xt, float(et), gt, ft
     return None
-
-
-def _modes(zero_modes, x, m):
-    """The zero modes as the columns of an (x.size, k) array, or None."""
-    if zero_modes is None:
-        return None
-    w = np.asarray(zero_modes(x), dtype=np.float64).reshape(-1, x.size).T
-    return w if w.shape[1] else None
-
-
-def _negative_count(f, modes) -> int:
-    """Negative eigenvalues of the factored (unmodified) matrix A in the A-complement of the
-    modes W: neg(A) - neg(Wᵀ A⁻¹ W) (Haynsworth's inertia additivity, A + βWWᵀ as β → ∞)."""
-    if f.negative == 0 or modes is None:
-        return f.negative
-    s = modes.T @ np.column_stack([f.solve(w) for w in modes.T])
-    return f.negative - int(np.sum(np.linalg.eigvalsh(0.5 * (s + s.T)) < 0))
-
-
-def _deflate(v, modes, m):
-    """v with its M-projection on the modes removed."""
-    if modes is None:
-        return v
-    mw = m[:, None] * modes
-    return v - modes @ np.linalg.solve(modes.T @ mw, mw.T @ v)
-
-
-def _lowest_mode(h, m, ldl, check, floor, modes=None):
-    """Lowest eigenpair estimate (μ, v) of the pencil (H, M), from a factor with a negative pivot.
-
-    The start is the factor's own direction of negative curvature (Pᵀ L⁻ᵀ e_k); LOBPCG,
-    preconditioned by the modified factor of H, improves it towards the lowest mode (the
-    buckling mode, not a local wiggle). The direction returned always has vᵀHv < 0.
-    """
-    v0 = check.negative_direction()
-    if v0 is None:
-        return 0.0, None
-    hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
-    n = hs.shape[0]
-    v0 = _deflate(v0, modes, m)
-    mu0 = _rayleigh(hs, m, v0)
-    if n < 8:
-        return mu0, v0
-    pre = ldl.factorize(hs, floor=floor)
-    rng = np.random.default_rng(0)  # fixed: results reproducible
-    block = _deflate(np.column_stack([v0, rng.standard_normal((n, 2))]), modes, m)
-    try:
-        vals, vecs = spla.lobpcg(
-            hs, block, B=sp.diags(m), M=spla.LinearOperator((n, n), matvec=pre.solve),
-            Y=modes, largest=False, maxiter=60, tol=1e-4 * math.sqrt(n), verbosityLevel=0,
-        )  # fmt: skip
-    except (np.linalg.LinAlgError, ValueError):  # pragma: no cover - keep the pivot direction
-        return mu0, v0
-    v = _deflate(vecs[:, int(np.argmin(vals))], modes, m)
-    mu = _rayleigh(hs, m, v)
-    return (mu, v) if mu < mu0 else (mu0, v0)
-
-
-def _rayleigh(h, m, v) -> float:
-    den = float(v @ (m * v))
-    return float(v @ (h @ v)) / den if den > 0 else 0.0
-
-
-def _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible) -> bool:
-    """Step downhill along the lowest mode from an unstable equilibrium; False if no step can."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # LOBPCG's "did not converge" is not an error here
-        mu, v = _lowest_mode(h, m, ldl, check, floor, modes)
-    if v is None or not mu < 0:
-        return False
-    d = v.reshape(st.x.shape).copy()
-    if st.mask is not None:
-        d.reshape(-1)[st.mask] = 0.0
-    if float(np.vdot(st.g, d)) > 0:
-        d = -d
-    biggest = float(np.max(_row_norms(d)))
-    if not biggest > 0:
-        return False
-    length = st.radius if math.isfinite(st.radius) else 1e-3 * (1.0 + float(np.max(np.abs(st.x))))
-    d = d * (length / biggest)
-    if step_limit is not None:
-        safe = step_limit(st.x, d)
-        if safe < 1.0:
-            d = 0.8 * safe * d
-    for _ in range(40):
-        xt = st.x + d
-        et, gt = fun(xt)
-        st.nfev += 1
-        if math.isfinite(et) and et < st.e and (feasible is None or feasible(xt)):
-            st.x, st.e, st.g, st.fmax = xt, float(et), gt, max_force(gt)
-            return True
-        d = 0.5 * d
-    return False
 
 
 def resolution(energy: float) -> float:
