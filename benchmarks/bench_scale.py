@@ -219,25 +219,25 @@ def bench_compare():
 
 def bench_gauge(ns=()):
     """Default-schedule ramps with the zero modes' gauge in the Newton step (the engine) and
-    without it (``minimize._gauge_entries`` returning None: the engine before 4483c13, bit
+    without it (``minimize._gauge_pin`` returning None: the engine before 4483c13, bit
     for bit), in one process: N = 100 (k_b = 5, k_s = 5e5) seeds 0-2, then the continuum wire
     at each N given (seed 0). And where it matters: the lowest mode of the Hessian in the
     middle of N = 100's λ = 917 stage against the rotation about the trap's centre."""
     import crumple.minimize as minimize_module
 
-    on = minimize_module._gauge_entries
+    on = minimize_module._gauge_pin
     run_ramp(Wire(k_b=5, k_s=5e5, n_segments=10), seed=0)  # compilation out of the timings
     print("== the rotation's gauge in the Newton step: on (engine) vs off (before 4483c13) ==")
     cases = [(Wire(k_b=5, k_s=5e5), s, "N = 100 default") for s in (0, 1, 2)]
     cases += [(continuum_wire(n), 0, f"N = {n} continuum") for n in ns]
     for wire, seed, label in cases:
         out = []
-        for name, entries in (("on", on), ("off", lambda zero_modes, x: None)):
-            minimize_module._gauge_entries = entries
+        for name, pin in (("on", on), ("off", lambda h, modes: None)):
+            minimize_module._gauge_pin = pin
             try:
                 r, t = cpu(lambda w=wire, s=seed: run_ramp(w, seed=s))
             finally:
-                minimize_module._gauge_entries = on
+                minimize_module._gauge_pin = on
             its = sum(s.result.iterations for s in r.stages)
             fac = sum(s.result.factorizations for s in r.stages)
             ok = sum(s.result.converged for s in r.stages)
@@ -255,12 +255,12 @@ def _gauge_overlap():
     wire = Wire(k_b=5, k_s=5e5)
     stages = run_ramp(wire, Ramp(lambdas=default_schedule()[:38]), seed=0).stages
     lam = default_schedule()[38]
-    on = minimize_module._gauge_entries
-    minimize_module._gauge_entries = lambda zero_modes, x: None
+    on = minimize_module._gauge_pin
+    minimize_module._gauge_pin = lambda h, modes: None
     try:
         x = minimize_wire(wire, stages[-1].positions, lam, maxiter=50).x
     finally:
-        minimize_module._gauge_entries = on
+        minimize_module._gauge_pin = on
     m = np.repeat(node_lengths(wire), 2)
     e = WireEnergy(wire, lam)
     rot = np.column_stack([-x[:, 1], x[:, 0]]).ravel()

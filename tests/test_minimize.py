@@ -620,3 +620,19 @@ def test_barriers_leave_a_problem_without_contacts_unchanged():
     a = newton(fun, [0.5], hess=hess, step_limit=step_limit, ftol=1e-12)
     b = newton(fun, [0.5], hess=hess, step_limit=step_limit, barriers=barriers, ftol=1e-12)
     assert a.x.tolist() == b.x.tolist() and a.iterations == b.iterations
+
+
+def test_the_gauge_is_fixed_where_the_mode_is_largest_now():
+    """The shift sits on the entry where each zero mode is largest in the current state, and
+    is large enough to give the mode positive curvature even where H is negative there."""
+    from crumple.minimize_modes import _gauge_pin
+
+    rng = np.random.default_rng(3)
+    h = sp.csc_matrix(-np.eye(6) + 0.1 * np.ones((6, 6)))
+    for _ in range(5):
+        w = rng.standard_normal(6)
+        pin = _gauge_pin(h, w[None])
+        j = int(np.argmax(np.abs(w)))
+        assert np.flatnonzero(pin).tolist() == [j]
+        assert w @ (h @ w) + pin[j] * w[j] ** 2 > 0
+    assert _gauge_pin(h, np.zeros((0, 6))) is None

@@ -563,3 +563,14 @@ def test_maxiter_default_depends_on_the_method():
     sweep = Sweep(wire={"n_segments": 8}, ramp={"lambdas": [1, 2], "method": "powell"})
     assert next(iter(sweep.runs())).ramp.maxiter == 20
     assert Ramp.from_dict(Ramp().to_dict()) == Ramp()
+
+
+def test_per_node_wire_coils_up_at_the_first_stage():
+    """The per-node wire collapses from the straight start into a coil at λ = 1. With the
+    rotation's gauge fixed once per stage on the entry where the rotation was largest at the
+    start, the entry lost its lever arm as the wire coiled and this stage stopped at 5000
+    iterations (the full reproduction's seeds; 26 of 8800 per-node stages)."""
+    wire = Wire(k_b=5, k_s=5e5, confinement="per-node")
+    r = run_ramp(wire, Ramp(lambdas=[1.0]), seed=replica_seeds(20070101, 10)[2])
+    assert r.stages[0].result.converged, r.stages[0].result.message
+    assert r.stages[0].result.iterations < 1000

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .linalg import CSC, LDLT
-from .minimize_modes import _escape, _gauge_entries, _gauge_pin, _modes, _negative_count
+from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
 
@@ -187,7 +187,7 @@ def newton(
         raise ValueError(f"the energy at the starting point is {e}")
     st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
     st.radius = math.inf if max_step is None else float(max_step)
-    st.zero_modes, st.gauge = zero_modes, _gauge_entries(zero_modes, x)
+    st.zero_modes = zero_modes
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -346,7 +346,6 @@ class _State:
     mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
     factor: object = None  # the factor the last direction was solved with
     zero_modes: Callable | None = None
-    gauge: np.ndarray | None = None  # (mode, entry of x.ravel()) pairs that pin the gauge
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
 
@@ -370,8 +369,11 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         h = hess(st.x)
         st.fres = _force_resolution(h, st.x)
         f = ldl.factorize(h, floor=floor)
-        if f.modified and st.gauge is not None:  # indefinite along a zero mode only?
-            f = ldl.factorize(h, shift=_gauge_pin(h, st.gauge, st.zero_modes(st.x)), floor=floor)
+        pin = None
+        if f.modified and st.zero_modes is not None:  # indefinite along a zero mode only?
+            pin = _gauge_pin(h, st.zero_modes(st.x))
+        if pin is not None:
+            f = ldl.factorize(h, shift=pin, floor=floor)
         if f.modified == 0:
             st.skip = 0
             st.factor = f
@@ -382,7 +384,8 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
     st.nhev += 1
     hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
-    pin = 0.0 if st.gauge is None else _gauge_pin(hs, st.gauge, st.zero_modes(st.x))
+    pin = None if st.zero_modes is None else _gauge_pin(hs, st.zero_modes(st.x))
+    pin = 0.0 if pin is None else pin
     sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
     for _ in range(60):
         f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor)

@@ -18,22 +18,21 @@ from .linalg import CSC
 from .minimize_result import _row_norms, max_force
 
 
-def _gauge_entries(zero_modes, x) -> np.ndarray | None:
-    """Where to fix the gauge of the zero modes: (mode, entry of ``x.ravel()``) pairs, the entry
-    where the mode is largest, the entries of the modes before it excluded. None without."""
-    if zero_modes is None:
-        return None
-    w = np.abs(np.asarray(zero_modes(x), dtype=np.float64).reshape(-1, x.size))
+def _gauge_entries(w) -> list[tuple[int, int]]:
+    """Where to fix the gauge of the zero modes (rows of ``w``): (mode, entry) pairs, the entry
+    where the mode is largest now, the entries of the modes before it excluded."""
+    w = np.abs(w)
     pairs: list[tuple[int, int]] = []
     for k, mode in enumerate(w):
         mode[[j for _, j in pairs]] = 0.0
         if np.max(mode, initial=0.0) > 0:
             pairs.append((k, int(np.argmax(mode))))
-    return np.array(pairs, dtype=np.int64) if pairs else None
+    return pairs
 
 
-def _gauge_pin(h, gauge, modes) -> np.ndarray:
-    """The gauge shift: c_j on the entry j of each (mode, j) pair of ``gauge``, 0 elsewhere.
+def _gauge_pin(h, modes) -> np.ndarray | None:
+    """The gauge shift: c_j on the entry j where each zero mode (row of ``modes``) is largest,
+    0 elsewhere; None without modes.
 
     A zero mode w of the energy (a rigid rotation) is not a zero mode of its Hessian away from
     equilibrium: its curvature there is -gᵀ(d²x/dθ²), negative whenever the forces have an
@@ -42,12 +41,17 @@ def _gauge_pin(h, gauge, modes) -> np.ndarray:
     Adding c_j e_j e_jᵀ on an entry where w_j ≠ 0 leaves the model unchanged in the complement
     {s: s_j = 0} of w, a choice of gauge (the energy does not depend on the rotation, so the
     step need not either), and gives w the curvature wᵀHw + c_j w_j². c_j = max(|H_jj|,
-    -2 wᵀHw / w_j²): the scale of H, and at least enough to make w's curvature positive.
+    -2 wᵀHw / w_j²): the scale of H, and at least enough to make w's curvature positive. The
+    entry is chosen anew for each factorisation: an entry fixed once can see w_j → 0 as the
+    configuration changes (a straight wire coiling up), and c_j then grows without bound.
     """
     hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
     w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
+    pairs = _gauge_entries(w)
+    if not pairs:
+        return None
     pin = np.zeros(hs.shape[0])
-    for k, j in gauge:
+    for k, j in pairs:
         mode = w[k]
         lo, hi = hs.indptr[j], hs.indptr[j + 1]
         at = lo + int(np.searchsorted(hs.indices[lo:hi], j))
