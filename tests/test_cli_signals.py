@@ -117,3 +117,25 @@ def test_sigint_keeps_finished_replicas(tmp_path):
         assert json.loads(f.attrs["replica_ids"]) == [0]
     assert (tmp_path / "o" / "configurations.interrupted.png").exists()
     assert not (tmp_path / "o" / "ramps.h5").exists()  # ramps.h5 is always a complete run
+
+
+def test_a_ctrl_c_inside_a_compiled_call_is_still_a_ctrl_c():
+    """Numba turns a KeyboardInterrupt raised in its Python callbacks into a SystemError caused
+    by it; the CLI must read it as the interrupt it is, and nothing else as one."""
+    from crumple.cli.run import Terminated, signal_cause
+
+    def wrapped(inner):
+        try:
+            try:
+                raise inner
+            except BaseException as e:
+                raise SystemError("returned a result with an exception set") from e
+        except SystemError as outer:
+            return outer
+
+    ctrl_c = KeyboardInterrupt()
+    assert signal_cause(wrapped(ctrl_c)) is ctrl_c
+    term = Terminated()
+    assert signal_cause(wrapped(term)) is term
+    assert signal_cause(wrapped(ValueError("x"))) is None
+    assert signal_cause(SystemError("plain")) is None

@@ -61,6 +61,8 @@ def main(argv=None) -> int:
     except (ValueError, TypeError, OSError) as exc:
         print(f"crumple: error: {'; '.join(str(exc).splitlines())}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not isinstance(run.signal_cause(exc), KeyboardInterrupt):
+            raise
         print("crumple: interrupted", file=sys.stderr)
         return 130
