@@ -77,8 +77,8 @@ def signal_cause(exc: BaseException) -> BaseException | None:
 
     A signal that lands while Numba runs a Python callback of a compiled function (it unpickles
     constants there) comes out as a ``SystemError`` whose cause is the KeyboardInterrupt; it is
-    still the user's Ctrl-C, and must end the run the same way (measured: one fresh-clone CI
-    run in a few)."""
+    still the user's Ctrl-C, and must end the run the same way (seen in a fresh-clone CI run:
+    the replicas were lost and the exit status was 1)."""
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, (KeyboardInterrupt, Terminated)):
