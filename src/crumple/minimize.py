@@ -362,6 +362,7 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     success), so that such a region costs about one factorisation per iteration.
     """
     g = st.g.ravel()
+    w = None  # the zero modes at x, evaluated once per direction
     if st.skip_left > 0:
         st.skip_left -= 1
     else:
@@ -371,7 +372,8 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         f = ldl.factorize(h, floor=floor)
         pin = None
         if f.modified and st.zero_modes is not None:  # indefinite along a zero mode only?
-            pin = _gauge_pin(h, st.zero_modes(st.x))
+            w = st.zero_modes(st.x)
+            pin = _gauge_pin(h, w)
         if pin is not None:
             f = ldl.factorize(h, shift=pin, floor=floor)
         if f.modified == 0:
@@ -384,7 +386,9 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
     st.nhev += 1
     hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
-    pin = None if st.zero_modes is None else _gauge_pin(hs, st.zero_modes(st.x))
+    if w is None and st.zero_modes is not None:
+        w = st.zero_modes(st.x)
+    pin = None if w is None else _gauge_pin(hs, w)
     pin = 0.0 if pin is None else pin
     sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
     for _ in range(60):
