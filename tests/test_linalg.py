@@ -9,7 +9,8 @@ import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from crumple.linalg import LDLT
+from crumple.linalg import CSC, LDLT
+from crumple.linalg_springs import spring_step
 
 
 def random_symmetric(rng, n, density, shift):
@@ -177,6 +178,86 @@ def test_spring_solve_out_of_rounds_still_stops_at_the_first_contact():
     assert np.dot(-np.ones(2), s) < 0
     s, ok = f.solve_springs(np.ones(2), *args, np.full(2, 1e9))
     assert ok and s == pytest.approx([0.25, 0.5], rel=1e-8)
+
+
+def _spring_problem(rng, n, m, logk, shift=False):
+    """A random positive definite model in raw CSC (every entry stored: springs fit its pattern),
+    m springs of 3 entries that all start beyond s = 0, and the dense rows of the springs."""
+    q = rng.standard_normal((n, n))
+    a = q @ q.T + 0.5 * np.eye(n)
+    diag = rng.uniform(0.0, 2.0, n) if shift else None
+    full = sp.csc_matrix(np.where(a == 0.0, 1e-300, a))  # keep every entry in the pattern
+    csc = CSC(full.data.copy(), full.indices, full.indptr)
+    g = rng.standard_normal(n)
+    w = min(3, n)
+    index = np.array([rng.choice(n, w, replace=False) for _ in range(m)])
+    value = rng.standard_normal((m, w))
+    offset = -rng.uniform(0.0, 0.5, m)
+    stiff = np.full(m, 10.0**logk)
+    rows = np.zeros((m, n))
+    for i in range(m):
+        rows[i, index[i]] = value[i]
+    dense = a + (np.diag(diag) if shift else 0.0)
+    return csc, diag, dense, g, index, value, offset, stiff, rows
+
+
+def _spring_model(dense, g, rows, offset, stiff, s):
+    gap = np.maximum(0.0, offset - rows @ s)
+    return g @ s + 0.5 * s @ dense @ s + 0.5 * np.sum(stiff * gap**2)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
+       logk=st.floats(0.0, 7.0), shift=st.booleans())  # fmt: skip
+def test_refactorised_spring_step_is_the_minimiser_from_any_start(seed, n, m, logk, shift):
+    """linalg_springs.spring_step (one factorisation of A + Σ_S k a aᵀ per round) finds the
+    same minimiser as enumerating the active sets, from a random start, and never raises the
+    model above its value at the start (monotone, so usable when it runs out of rounds)."""
+    rng = np.random.default_rng(seed)
+    csc, diag, dense, g, index, value, offset, stiff, rows = _spring_problem(rng, n, m, logk, shift)
+    ldl = LDLT()
+    ldl.factorize(csc, shift=diag)
+    start = rng.standard_normal(n)
+    s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start)
+    assert s is not None
+    q0 = _spring_model(dense, g, rows, offset, stiff, start)
+    assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))
+    assert ok, f"active set not found in {used} rounds"
+    want = _spring_kkt_minimiser(dense, g, rows, offset, stiff)
+    np.testing.assert_allclose(s, want, rtol=1e-6, atol=1e-8 * (1 + np.abs(want).max()))
+    assert ldl.analyses == 1  # every round reused the model's symbolic analysis
+
+
+def test_refactorised_spring_step_finishes_what_the_solves_ran_out_of_rounds_for():
+    """Identity model, p0 = (1, 1, 1, 1), four stiff springs the step enters one after the other:
+    one round of the solve per spring finds the first only; the refactorised step from there
+    finds all four in rounds that do not grow with their number."""
+    n = 4
+    eye = sp.csc_matrix(np.eye(n))
+    csc = CSC(eye.data.copy(), eye.indices, eye.indptr)
+    ldl = LDLT()
+    f = ldl.factorize(csc)
+    index, value = np.arange(n)[:, None], -np.ones((n, 1))
+    offset, stiff = -np.array([0.1, 0.2, 0.3, 0.4]), np.full(n, 1e9)
+    s0, ok = f.solve_springs(np.ones(n), index, value, offset, stiff, rounds=1, max_new=1)
+    assert not ok
+    s, ok, used = spring_step(ldl, csc, None, -np.ones(n), index, value, offset, stiff, s0)
+    assert ok and used <= 2
+    assert s == pytest.approx([0.1, 0.2, 0.3, 0.4], rel=1e-8)
+
+
+def test_refactorised_spring_step_refuses_a_spring_outside_the_pattern():
+    """A spring coupling two entries the matrix has no entry for cannot be added without a new
+    analysis: the step says so (None) instead of factorising another pattern."""
+    eye = sp.csc_matrix(np.eye(3))
+    csc = CSC(eye.data.copy(), eye.indices, eye.indptr)
+    ldl = LDLT()
+    ldl.factorize(csc)
+    start = np.array([0.0, 0.0, 1.0])  # the spring is active there
+    s, ok, _ = spring_step(ldl, csc, None, -np.ones(3), np.array([[0, 2]]),
+                           np.array([[1.0, -1.0]]), np.array([-0.1]), np.array([1e3]),
+                           start)  # fmt: skip
+    assert s is None and not ok
 
 
 @settings(max_examples=30, deadline=None)

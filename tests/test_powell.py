@@ -206,7 +206,13 @@ def test_powell_study_smoke_report(tmp_path):
 
 @pytest.mark.parametrize(
     "module",
-    ["crumple.powell", "crumple.minimize", "crumple.minimize_result", "crumple.minimize_modes"],
+    [
+        "crumple.powell",
+        "crumple.minimize",
+        "crumple.minimize_result",
+        "crumple.minimize_modes",
+        "crumple.linalg_springs",
+    ],
 )
 def test_each_solver_module_imports_on_its_own(module):
     # a fresh interpreter: an import cycle between minimize and powell showed only there

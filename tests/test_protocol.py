@@ -574,3 +574,38 @@ def test_per_node_wire_coils_up_at_the_first_stage():
     r = run_ramp(wire, Ramp(lambdas=[1.0]), seed=replica_seeds(20070101, 10)[2])
     assert r.stages[0].result.converged, r.stages[0].result.message
     assert r.stages[0].result.iterations < 1000
+
+
+def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypatch):
+    """Where the one-solve-per-spring model runs out of rounds, Newton finishes the spring step
+    with a factorisation per active set (crumple.linalg_springs). Forced to run out at once
+    (one round), every contact step takes that path, and the default wire still reaches every
+    contact stage's equilibrium, stable, without crossing, at the same energy as the normal
+    path to within the force tolerance."""
+    import crumple.minimize as minimize_module
+    from crumple.linalg import Factorization
+
+    wire = Wire(k_b=5, k_s=5e5, n_segments=60)
+    ramp = Ramp(lambdas=[1.0, 40.0, 200.0, 600.0])
+    normal = run_ramp(wire, ramp, seed=1)
+    calls = []
+    smw = Factorization.solve_springs
+
+    def one_round(self, *args, **kwargs):
+        return smw(self, *args, **{**kwargs, "rounds": 1, "max_new": 1})
+
+    original = minimize_module.spring_step
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(Factorization, "solve_springs", one_round)
+    monkeypatch.setattr(minimize_module, "spring_step", counted)
+    forced = run_ramp(wire, ramp, seed=1)
+    assert len(calls) > 10
+    for a, b in zip(normal.stages, forced.stages, strict=True):
+        assert b.result.converged, b.result.message  # converged: small force and stable
+        assert not has_crossings(b.positions)
+        assert b.energy.total == pytest.approx(a.energy.total, rel=1e-6)
+    assert forced.stages[-1].energy.hard_core > 0  # the last stage is in contact

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .linalg import CSC, LDLT
+from .linalg_springs import spring_step
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
@@ -42,6 +43,9 @@ RADIUS_SHRINK = 4.0
 RESOLUTION_FACTOR = 10.0
 RADIUS_GROW = 4.0
 SKIP_MAX = 8
+#: How many times :func:`_barrier_step` lists the barriers: for the Newton step, then for each
+#: step found, while that adds springs.
+RELISTINGS = 3
 
 
 def newton(
@@ -248,7 +252,7 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
     st.it += 1
     p = _direction(st, hess, hess_fallback, ldl, floor, m)
     if barriers is not None:
-        p = _barrier_step(st, p, barriers)
+        p = _barrier_step(st, p, barriers, ldl)
     if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
         p.reshape(-1)[st.mask] = 0.0
     if not np.isfinite(p).all():
@@ -345,6 +349,8 @@ class _State:
     sigma: float = 0.0
     mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
     factor: object = None  # the factor the last direction was solved with
+    model: tuple | None = None  # (matrix, shift) it is the factor of; None: not known
+    spring_fallbacks: int = 0  # iterations whose springs needed a factorisation per round
     zero_modes: Callable | None = None
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
@@ -378,7 +384,7 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
             f = ldl.factorize(h, shift=pin, floor=floor)
         if f.modified == 0:
             st.skip = 0
-            st.factor = f
+            st.factor, st.model = f, _model_of(h, pin)
             return -f.solve(g).reshape(st.x.shape)
         if hess_fallback is not None:
             st.skip = min(max(1, 2 * st.skip), SKIP_MAX)
@@ -395,35 +401,80 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor)
         if f.modified == 0:
             st.sigma = sigma
-            st.factor = f
+            st.factor, st.model = f, _model_of(hs, sigma * m + pin)
             return -f.solve(g).reshape(st.x.shape)
         v = f.negative_direction()
         mu = float(v @ (hs @ v) + v @ (pin * v)) / float(v @ (m * v)) if v is not None else 0.0
         sigma = max(2.0 * sigma, -2.0 * mu, floor[0] / m[0])
     st.sigma = sigma
-    st.factor = f
+    st.factor, st.model = f, None
     return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
 
 
-def _barrier_step(st, p, barriers) -> np.ndarray:
+def _model_of(h, shift):
+    """(matrix, shift) of a factor, where the spring step can refactorise it (sparse)."""
+    if isinstance(h, CSC) or (sp.issparse(h) and h.format == "csc"):
+        return h, (None if np.isscalar(shift) and shift == 0.0 else shift)
+    return None
+
+
+def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
     """The step of the model with the one-sided springs of ``barriers`` added.
 
     The minimiser of the convex piecewise quadratic gᵀs + ½ sᵀHs + Σ k_i/2 max(0, r_i - a_iᵀs)²,
-    H the factored model (``st.factor``): one solve per spring that becomes active, no new
-    factorisation (:meth:`crumple.linalg.Factorization.solve_springs`). Because every r_i <= 0,
-    the model is zero at s = 0, so its minimiser is a descent direction; if the active set
-    was not found within the rounds allowed, p is kept.
+    H the factored model (``st.factor``) (:func:`_spring_model_step`). The springs are those
+    ``barriers`` lists for p; the step found, held by its first contacts, can turn towards
+    pairs p never approached, so the springs are listed again for it and the model solved
+    again with them, up to ``RELISTINGS`` listings in all. Because every r_i <= 0, the model
+    is zero at s = 0, so its minimiser is a descent direction; if none came out, p is kept.
     """
-    index, value, offset, stiff = barriers(st.x, p)
-    if len(offset) == 0:
+    rows = barriers(st.x, p)
+    if len(rows[2]) == 0:
         return p
+    g = st.g.ravel()
+    best = p
+    for listing in range(RELISTINGS):
+        s = _spring_model_step(st, p, rows, ldl)
+        if s is None or not float(np.dot(g, s)) < 0.0:
+            break
+        best = s.reshape(p.shape)
+        if listing + 1 == RELISTINGS:
+            break
+        rows, grown = _merged_rows(rows, barriers(st.x, best))
+        if not grown:
+            break
+    return best
+
+
+def _spring_model_step(st, p, rows, ldl):
+    """The springs' model step: one solve per spring that becomes active, no new factorisation
+    (:meth:`crumple.linalg.Factorization.solve_springs`); where that runs out of rounds (a step
+    through a packed region), one factorisation of H plus the active springs per round
+    (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
+    still not found. None: no step."""
+    index, value, offset, stiff = rows
     if st.mask is not None:
         value = np.array(value, dtype=np.float64)
         value[st.mask[index]] = 0.0
     s, ok = st.factor.solve_springs(p, index, value, offset, stiff)
-    if not (ok and float(np.dot(st.g.ravel(), s)) < 0.0):
-        return p
-    return s.reshape(p.shape)
+    if not ok:
+        if st.model is None:
+            return None
+        st.spring_fallbacks += 1
+        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, s)
+    return s
+
+
+def _merged_rows(rows, more):
+    """The springs of ``rows`` and those of ``more`` not among them (a spring is known by its
+    first two entries of ``index``: its pair); and whether any was added."""
+    if len(more[2]) == 0:
+        return rows, False
+    key = rows[0][:, 0] * (1 << 32) + rows[0][:, 2]
+    new = ~np.isin(more[0][:, 0] * (1 << 32) + more[0][:, 2], key)
+    if not new.any():
+        return rows, False
+    return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
 
 
 def _force_resolution(h, x) -> float:

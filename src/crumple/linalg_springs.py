@@ -1,0 +1,144 @@
+"""The step of a Newton model with many one-sided springs: one factorisation per active set.
+
+Private to the minimiser. :meth:`crumple.linalg.Factorization.solve_springs` finds the
+minimiser of the convex piecewise quadratic
+
+    q(s) = gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)²
+
+with the factor of A alone, one solve per spring that joins the active set. That is cheap when
+a step enters a few springs, and it is what the minimiser tries first. A step through a packed
+region enters hundreds, most of which the first contacts then keep it from; the rounds run out
+and the step ignores every contact (docs/performance.md, "Measured, not adopted").
+:func:`spring_step` finishes the job in another way: a semismooth Newton iteration on q, in
+which each round factorises A + Σ_S k_i a_i a_iᵀ for the springs S active at the current point
+(the springs' rows lie in A's sparsity pattern, so the symbolic analysis is reused) and moves
+to the minimiser of that quadratic, or to the minimiser of q on the way there (an exact line
+search: q is convex along any line, its derivative piecewise linear and nondecreasing). q falls
+at every round, and a round whose solution has the active set it was computed with has found
+the exact minimiser. The cost of a round does not depend on how many springs are active.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .linalg import CSC, _csc_matvec
+
+
+@njit(cache=True)
+def _with_springs(indptr, indices, data, index, value, stiff, active):
+    """``data`` plus k_i a_i a_iᵀ of every active spring, in the same CSC pattern; ok False
+    (and the data unusable) when an entry of some a_i a_iᵀ is not in the pattern."""
+    out = data.copy()
+    w = index.shape[1]
+    for i in range(index.shape[0]):
+        if not active[i]:
+            continue
+        for c2 in range(w):
+            col = index[i, c2]
+            for c1 in range(w):
+                row = index[i, c1]
+                lo, hi = indptr[col], indptr[col + 1]
+                while lo < hi:  # rows are sorted within a column
+                    mid = (lo + hi) // 2
+                    if indices[mid] < row:
+                        lo = mid + 1
+                    else:
+                        hi = mid
+                if lo == indptr[col + 1] or indices[lo] != row:
+                    return out, False
+                out[lo] += stiff[i] * value[i, c1] * value[i, c2]
+    return out, True
+
+
+@njit(cache=True)
+def _rows_dot(index, value, v):
+    """a_iᵀ v for every spring i."""
+    m, w = index.shape
+    out = np.empty(m)
+    for i in range(m):
+        t = 0.0
+        for c in range(w):
+            t += value[i, c] * v[index[i, c]]
+        out[i] = t
+    return out
+
+
+@njit(cache=True)
+def _spring_rhs(b, index, value, offset, stiff, active):
+    """b + Σ_S k_i r_i a_i."""
+    out = b.copy()
+    for i in range(index.shape[0]):
+        if active[i]:
+            for c in range(index.shape[1]):
+                out[index[i, c]] += stiff[i] * offset[i] * value[i, c]
+    return out
+
+
+@njit(cache=True)
+def _slope(t, c0, c1, u, v, offset, stiff):
+    """q'(t) along the line: c0 + c1 t - Σ k_i max(0, r_i - u_i - t v_i) v_i."""
+    f = c0 + c1 * t
+    for i in range(u.shape[0]):
+        gap = offset[i] - u[i] - t * v[i]
+        if gap > 0.0:
+            f -= stiff[i] * gap * v[i]
+    return f
+
+
+@njit(cache=True)
+def _line_minimum(c0, c1, u, v, offset, stiff):
+    """The t in [0, 1] that minimises q(s + t d) (u = Uᵀs, v = Uᵀd; q' is nondecreasing in
+    t): 1 if q' <= 0 there, else the root of q' by bisection."""
+    if _slope(1.0, c0, c1, u, v, offset, stiff) <= 0.0:
+        return 1.0
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if _slope(mid, c0, c1, u, v, offset, stiff) <= 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30):
+    """The minimiser of q (module docstring) by semismooth Newton from ``start``.
+
+    ``ldl`` is the :class:`crumple.linalg.LDLT` that factorised A = ``a`` + diag(``shift``)
+    (``a`` a CSC matrix holding both triangles, as :class:`crumple.linalg.CSC`; ``shift``
+    a vector or None); the springs are as in :meth:`crumple.linalg.Factorization.solve_springs`.
+    Returns ``(s, converged, rounds_used)``: converged when the active set was found, s then the
+    exact minimiser up to round-off. Not converged, s is the best point met, with
+    q(s) <= q(start); None when a spring's rows fall outside the pattern of ``a``.
+    """
+    indptr, indices = a.indptr, a.indices
+    data = np.ascontiguousarray(a.data, dtype=np.float64)
+    sh = np.zeros(g.shape[0]) if shift is None else np.asarray(shift, dtype=np.float64)
+
+    def a_mul(v):
+        return _csc_matvec(indptr, indices, data, v) + sh * v
+
+    s = np.array(start, dtype=np.float64)
+    used = 0
+    for used in range(1, rounds + 1):
+        u = _rows_dot(index, value, s)
+        active = u < offset
+        merged, ok = _with_springs(indptr, indices, data, index, value, stiff, active)
+        if not ok:
+            return None, False, used
+        f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
+        if f.modified or f.negative:
+            return s, False, used
+        trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
+        if np.array_equal(_rows_dot(index, value, trial) < offset, active):
+            return trial, True, used
+        d = trial - s
+        ad = a_mul(d)
+        t = _line_minimum(float(g @ d + s @ ad), float(d @ ad), u, _rows_dot(index, value, d),
+                          offset, stiff)  # fmt: skip
+        if t <= 0.0:
+            break
+        s = s + t * d
+    return s, False, used
