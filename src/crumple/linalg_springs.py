@@ -129,7 +129,7 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
         if not ok:
             return None, False, used
         f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
-        if f.modified or f.negative:
+        if f.negative:  # A + springs is positive definite when A is: round-off only
             return s, False, used
         trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
         if np.array_equal(_rows_dot(index, value, trial) < offset, active):

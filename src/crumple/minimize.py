@@ -350,7 +350,6 @@ class _State:
     mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
     factor: object = None  # the factor the last direction was solved with
     model: tuple | None = None  # (matrix, shift) it is the factor of; None: not known
-    spring_fallbacks: int = 0  # iterations whose springs needed a factorisation per round
     zero_modes: Callable | None = None
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
@@ -425,8 +424,10 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
     H the factored model (``st.factor``) (:func:`_spring_model_step`). The springs are those
     ``barriers`` lists for p; the step found, held by its first contacts, can turn towards
     pairs p never approached, so the springs are listed again for it and the model solved
-    again with them, up to ``RELISTINGS`` listings in all. Because every r_i <= 0, the model
-    is zero at s = 0, so its minimiser is a descent direction; if none came out, p is kept.
+    again with them, up to ``RELISTINGS`` listings in all. Every step kept is checked to be a
+    descent direction (gᵀs < 0: the model's minimiser is one, because every r_i <= 0 makes the
+    model zero at s = 0; a point the solve reached without the active set need not be). If
+    none is, p is kept.
     """
     rows = barriers(st.x, p)
     if len(rows[2]) == 0:
@@ -460,18 +461,18 @@ def _spring_model_step(st, p, rows, ldl):
     if not ok:
         if st.model is None:
             return None
-        st.spring_fallbacks += 1
-        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, s)
+        start = s if np.isfinite(s).all() else p.ravel()
+        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, start)
     return s
 
 
 def _merged_rows(rows, more):
-    """The springs of ``rows`` and those of ``more`` not among them (a spring is known by its
-    first two entries of ``index``: its pair); and whether any was added."""
+    """The springs of ``rows`` and those of ``more`` not among them, and whether any was added.
+    Both listings are made at the same point, so a spring is known by its row of ``index``."""
     if len(more[2]) == 0:
         return rows, False
-    key = rows[0][:, 0] * (1 << 32) + rows[0][:, 2]
-    new = ~np.isin(more[0][:, 0] * (1 << 32) + more[0][:, 2], key)
+    seen = set(map(bytes, np.ascontiguousarray(rows[0], dtype=np.int64)))
+    new = np.array([bytes(r) not in seen for r in np.ascontiguousarray(more[0], dtype=np.int64)])
     if not new.any():
         return rows, False
     return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
