@@ -40,11 +40,14 @@ __all__ = ["CSC", "LDLT", "Factorization"]
 
 
 @njit(cache=True)
-def _etree(n, ap, ai):
-    """Elimination tree and the number of nonzeros of every column of L (QDLDL_etree)."""
+def _etree(n, ap, ai, budget=-1):
+    """Elimination tree and the number of nonzeros of every column of L (QDLDL_etree), and
+    their total; with ``budget`` >= 0, the walk stops as soon as the total exceeds it (the
+    work is O(nnz(L)): an order with much fill costs much to count) and the total is -1."""
     work = np.zeros(n, dtype=np.int64)
     lnz = np.zeros(n, dtype=np.int64)
     parent = np.full(n, -1, dtype=np.int64)
+    total = 0
     for j in range(n):
         work[j] = j
         for p in range(ap[j], ap[j + 1]):
@@ -53,9 +56,12 @@ def _etree(n, ap, ai):
                 if parent[i] == -1:
                     parent[i] = j
                 lnz[i] += 1
+                total += 1
                 work[i] = j
                 i = parent[i]
-    return parent, lnz
+        if budget >= 0 and total > budget:
+            return parent, lnz, -1
+    return parent, lnz, total
 
 
 @njit(cache=True)
@@ -257,14 +263,17 @@ class _Symbolic:
         n = a.shape[0]
         self.n = n
         self.indptr, self.indices = a.indptr, a.indices
-        best = None
-        for perm in (np.arange(n), _rcm(a)):
-            ap, ai, src = _permuted_upper(a, perm)
-            parent, lnz = _etree(n, ap, ai)
-            total = int(lnz.sum())
-            if best is None or total < best[0]:
-                best = (total, perm, ap, ai, src, parent, lnz)
-        total, self.perm, self.ap, self.ai, self.src, self.parent, lnz = best
+        # the natural order unless RCM's L is strictly smaller; RCM counted first, so that the
+        # natural order's count (all fill, for a packed wire) stops once it is beaten
+        perm = _rcm(a)
+        ap, ai, src = _permuted_upper(a, perm)
+        best = (perm, ap, ai, src, *_etree(n, ap, ai))
+        perm = np.arange(n)
+        ap, ai, src = _permuted_upper(a, perm)
+        parent, lnz, total = _etree(n, ap, ai, best[-1])
+        if total >= 0:
+            best = (perm, ap, ai, src, parent, lnz, total)
+        self.perm, self.ap, self.ai, self.src, self.parent, lnz, total = best
         self.lp = np.zeros(n + 1, dtype=np.int64)
         np.cumsum(lnz, out=self.lp[1:])
         self.l_nnz = total
