@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crumple.linalg import CSC, LDLT
-from crumple.linalg_springs import spring_step
+from crumple.linalg_springs import new_rows, spring_step
 
 
 def random_symmetric(rng, n, density, shift):
@@ -265,6 +265,20 @@ def test_refactorised_spring_step_finishes_what_the_solves_ran_out_of_rounds_for
     s, ok, used = spring_step(ldl, csc, None, -np.ones(n), index, value, offset, stiff, s0)
     assert ok and used <= 2
     assert s == pytest.approx([0.1, 0.2, 0.3, 0.4], rel=1e-8)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(0, 30), k=st.integers(0, 30),
+       w=st.integers(1, 6))  # fmt: skip
+def test_new_rows_are_exactly_the_rows_not_listed_before(seed, m, k, w):
+    """linalg_springs.new_rows (a relisting's springs not in the first listing) against a set
+    of tuples, with repeated rows and small entries so that many rows coincide."""
+    rng = np.random.default_rng(seed)
+    old = rng.integers(0, 3, (m, w))
+    new = np.concatenate([old[rng.integers(0, m, k // 2)] if m else old[:0],
+                          rng.integers(0, 3, (k - k // 2 if m else k, w))])  # fmt: skip
+    seen = {tuple(r) for r in old.tolist()}
+    assert new_rows(old, new).tolist() == [tuple(r) not in seen for r in new.tolist()]
 
 
 def test_refactorised_spring_step_refuses_a_spring_outside_the_pattern():

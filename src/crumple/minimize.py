@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .linalg import CSC, LDLT
-from .linalg_springs import spring_step
+from .linalg_springs import new_rows, spring_step
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
@@ -439,7 +439,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
-        if listing + 1 == RELISTINGS:
+        if listing + 1 == RELISTINGS or np.array_equal(best, p):  # no spring held p: listed
             break
         rows, grown = _merged_rows(rows, barriers(st.x, best))
         if not grown:
@@ -471,8 +471,9 @@ def _merged_rows(rows, more):
     Both listings are made at the same point, so a spring is known by its row of ``index``."""
     if len(more[2]) == 0:
         return rows, False
-    seen = set(map(bytes, np.ascontiguousarray(rows[0], dtype=np.int64)))
-    new = np.array([bytes(r) not in seen for r in np.ascontiguousarray(more[0], dtype=np.int64)])
+    new = new_rows(
+        np.ascontiguousarray(rows[0], dtype=np.int64), np.ascontiguousarray(more[0], dtype=np.int64)
+    )
     if not new.any():
         return rows, False
     return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
