@@ -87,8 +87,8 @@ PROFILES = MappingProxyType(
         ),
         "quick": ContinuumProfile(
             name="quick",
-            description="QUICK PROFILE: small N (≤ 400), to fit in 10 minutes (contact stages "
-            "take thousands of Newton iterations at large Λ); Λ ≤ 10⁵ for the collapse, "
+            description="QUICK PROFILE: small N (≤ 400), to fit in 10 minutes; Λ ≤ 10⁵ for "
+            "the collapse, "
             "≤ 10⁶ for the sweep, 3 disorder replicas; no power-law range is expected at "
             "these sizes",
             replicas=3,
@@ -110,8 +110,9 @@ PROFILES = MappingProxyType(
         ),
         "full": ContinuumProfile(
             name="full",
-            description="FULL PROFILE (issue 12): Λ up to 10¹⁰, N up to 10⁴; not run: contact "
-            "stages above Λ ≈ 4·10⁴ do not converge at d = 10⁻⁵ (docs/continuum.md)",
+            description="FULL PROFILE (issue 12): Λ up to 10¹⁰, N up to 10⁴; not run: one "
+            "N = 1000 ramp to Λ = 10⁸ takes half an hour, so these sizes need far more than "
+            "2 hours (docs/continuum.md)",
             replicas=5,
             confinements=_geom(1e2, 1e8, 25),
             collapse_points=(
