@@ -439,7 +439,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
-        if listing + 1 == RELISTINGS or np.array_equal(best, p):  # no spring held p: listed
+        if listing + 1 == RELISTINGS or np.array_equal(best, p):  # p unchanged: same listing
             break
         rows, grown = _merged_rows(rows, barriers(st.x, best))
         if not grown:
