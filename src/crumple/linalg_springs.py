@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from .linalg import CSC, _csc_matvec
+from .linalg_solve import _row_dot
 
 
 @njit(cache=True)
@@ -55,13 +56,9 @@ def _with_springs(indptr, indices, data, index, value, stiff, active):
 @njit(cache=True)
 def _rows_dot(index, value, v):
     """a_iᵀ v for every spring i."""
-    m, w = index.shape
-    out = np.empty(m)
-    for i in range(m):
-        t = 0.0
-        for c in range(w):
-            t += value[i, c] * v[index[i, c]]
-        out[i] = t
+    out = np.empty(index.shape[0])
+    for i in range(index.shape[0]):
+        out[i] = _row_dot(index, value, i, v)
     return out
 
 
