@@ -129,7 +129,9 @@ def test_convergence_rule_edge_cases():
 # ---- the study: profiles and the smoke report ----------------------------------------------------
 
 
-def test_profiles_build_and_full_is_declared_at_issue_sizes():
+def test_profiles_build_and_full_spans_the_issue_range():
+    """The full profile is sized to 2 h on 2 cores (docs/continuum.md): the sweep still goes to
+    Λ = 10¹⁰, the N-convergence ramps pass through Λ = 10⁴, 10⁶, 10⁸ and span a decade in N."""
     from crumple.reproduce import registry
 
     for prof in PROFILES.values():
@@ -137,8 +139,25 @@ def test_profiles_build_and_full_is_declared_at_issue_sizes():
             assert len(e.build(prof)) > 0
     full = PROFILES["full"]
     assert max(full.sweep_confinements) >= 1e10
-    assert full.sweep_n >= 1e4
-    assert max(n for _, n in full.collapse_points) >= 1e4
+    for big in (1e4, 1e6, 1e8):
+        assert np.min(np.abs(np.log10(full.confinements) - np.log10(big))) < 1e-6
+    ns = [n for _, n in full.collapse_points]
+    assert max(ns) >= 10 * min(ns)
+    # the sweep's N resolves ℓ by the quick profile's rule (7.3 segments per ℓ) to Λ ≥ 10⁸
+    assert C.segments_per_loop(1e8, full.sweep_n) >= 7.3
+
+
+def test_loop_exponent_and_decades_on_known_data():
+    from crumple.reproduce.continuum_partition import COIL_LOOPS, _decades, _loop_fit
+
+    lam = np.geomspace(1e2, 1e10, 25)
+    coil = np.round(COIL_LOOPS * lam**0.25 * 10) / 10  # 0.19 L/ℓ, rounded as counts are
+    loops = np.vstack([coil, coil * 1.1])
+    beta = _loop_fit(lam, loops)
+    assert abs(beta.value - 1.0) < 0.02 and beta.sigma < 0.05
+    assert beta.fit_range[0] >= (2 / COIL_LOOPS) * 0.9  # only stages with at least 2 loops
+    assert _loop_fit(lam, np.ones((2, lam.size))).n == 0  # one loop everywhere: no law
+    assert _decades(lam) == list(range(0, 25, 3))
 
 
 def test_study_smoke_report_is_complete(tmp_path):
@@ -159,6 +178,9 @@ def test_study_smoke_report_is_complete(tmp_path):
     assert "SMOKE PROFILE" in md and "continuum limit" in md
     assert "N-convergence rule" in md
     html = (out / "report.html").read_text()
-    assert html.count("data:image/png;base64") == 6
+    assert html.count("data:image/png;base64") == 7
+    part = res["extra"]["continuum_partition"]
+    assert part["fraction_at_equilibrium"] == 1.0
+    assert "energy_over_coil" in part and "loops_beta" in part
     # a store of one profile is not reused for another
     assert main(["study", "continuum", "--quick", "--out", str(out), "--quiet"]) == 2

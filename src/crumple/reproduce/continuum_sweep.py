@@ -59,8 +59,10 @@ FIGURES = {
     "dense-packing radius (Ld/π)^1/2. (right) The local exponent d ln r_max/d ln Λ between "
     "successive stages, with -1/4 and 0 (dense packing) marked",
     "continuum_mass": "D_M at the largest Λ: (left) M(R) of each replica against R/r_max, with "
-    "the fit range [ℓ, r_max] shaded; (right) the local slope d ln M/d ln R against R/r_max, with "
-    "the paper's 1.33 and Donato & Gomes' cavity value 1.9 marked",
+    "the fit range [ℓ, r_max] shaded; (middle) the local slope d ln M/d ln R against R/r_max, "
+    "with the paper's 1.33 and Donato & Gomes' cavity value 1.9 marked; (right) D_M(Λ), the same "
+    "fit at every stage of the sweep (R ∈ [min(ℓ, r_max/2), r_max]; a slope, not a dimension, "
+    "wherever r_max/ℓ < 10), replica mean ± σ",
     "continuum_gamma": "γ = E_s/E_b against Λ: disorder replicas (grey), their mean (black), the "
     "perfect wire (red) and the paper's closed form x/(1 − x), x = (k_b λ)^1/2/(k_s L0) "
     "(dashed; prefactor 1, compare slopes)",
@@ -123,6 +125,11 @@ def _dm_at(s: Series, j: int, ell: float) -> tuple[Estimate, list, float]:
     return _combine(vals, errs, (lo, 1.0)), curves, ratio
 
 
+def _dm_each_stage(s: Series, lam_c) -> list[Estimate]:
+    """D_M(Λ): the fit of :func:`_dm_at` (R ∈ [min(ℓ, r_max/2), r_max]) at every stage."""
+    return [_dm_at(s, j, loop_length(float(g)))[0] for j, g in enumerate(lam_c)]
+
+
 def measure(ctx: Context) -> Record:
     """α, D_M and ε_l with their windows, local slopes and the perfect wire beside them."""
     s, pf = ctx.series["continuum_sweep"], ctx.series["continuum_perfect"]
@@ -138,6 +145,7 @@ def measure(ctx: Context) -> Record:
     ell = loop_length(float(lam_c[j]))
     dm, m_curves, ratio = _dm_at(s, j, ell)
     dm_pf, _, _ = _dm_at(pf, j, ell)
+    dm_lam = _dm_each_stage(s, lam_c)
     power_law = bool(np.isfinite(ratio) and ratio >= MIN_DECADE)
     d = float(s.hard_core)
     r_dense = math.sqrt(1.0 * d / math.pi)
@@ -177,6 +185,7 @@ def measure(ctx: Context) -> Record:
             "power_law_range": power_law,
             "r_dense": r_dense,
             "fraction_at_equilibrium": frac_eq,
+            "D_M_by_stage": {"Lambda": lam_c, "D_M": [e.to_dict() for e in dm_lam]},
         }
     }
     detail = {
@@ -190,6 +199,7 @@ def measure(ctx: Context) -> Record:
         "r_dense": r_dense,
         "m_curves": m_curves,
         "ell_ratio": 1.0 / ratio if ratio else math.nan,
+        "dm_lam": dm_lam,
     }
     return Record(
         rows=tuple(rows), alternatives=tuple(alts), claims=claims, extra=extra, detail=detail
@@ -316,7 +326,7 @@ def draw(rec: Record) -> dict:
     b.set_xlabel("Λ")
     b.set_ylabel("d ln r_max / d ln Λ")
     b.legend(fontsize=7)
-    fig2, (c, e) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    fig2, (c, e, h) = plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
     for rr, mm in d["m_curves"]:
         okm = mm > 0
         c.loglog(rr[okm], mm[okm], "-", lw=1)
@@ -333,6 +343,17 @@ def draw(rec: Record) -> dict:
     e.set_xlabel("R / r_max")
     e.set_ylabel("d ln M / d ln R")
     e.legend(fontsize=7)
+    dv = np.array([q.value for q in d["dm_lam"]])
+    ds = np.array([q.sigma for q in d["dm_lam"]])
+    okd = np.isfinite(dv)
+    h.errorbar(x[okd], dv[okd], yerr=np.where(np.isfinite(ds), ds, 0)[okd], fmt="ko-", ms=3,
+               capsize=2)  # fmt: skip
+    h.set_xscale("log")
+    h.axhline(1.33, ls=":", color="r", label="paper 1.33")
+    h.axhline(1.9, ls="--", color="b", label="cavity 1.9")
+    h.set_xlabel("Λ")
+    h.set_ylabel("D_M over [min(ℓ, r_max/2), r_max]")
+    h.legend(fontsize=7)
     fig3, g = plt.subplots(figsize=(6.5, 4.5), constrained_layout=True)
     for y in d["gamma"]:
         okg = np.isfinite(y) & (y > 0)
