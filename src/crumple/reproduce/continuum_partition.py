@@ -107,6 +107,17 @@ def _table(lam_c, e, contacts, loops, eq, nrep) -> list[dict]:
     return rows
 
 
+def _coil_claim(claim, measured, criterion, value, verdict) -> dict:
+    """A claim of the coil argument (ours, not the paper's); "not measured" without a value."""
+    return {
+        "claim": f"{claim} (ours, docs/continuum.md, an argument)",
+        "source": "docs/continuum.md, 'Strong confinement' (not the paper)",
+        "measured": measured,
+        "criterion": criterion,
+        "verdict": verdict if np.isfinite(value) else "not measured",
+    }
+
+
 def _claims(e, beta, lam_c, frac) -> tuple[dict, ...]:
     tot = e["total"][:, -1]
     m = _mean(tot)
@@ -115,26 +126,23 @@ def _claims(e, beta, lam_c, frac) -> tuple[dict, ...]:
     loop_ok = np.isfinite(beta.value) and abs(beta.value - 1.0) <= 2 * beta.sigma
     fr = f"[{beta.fit_range[0]:.3g}, {beta.fit_range[1]:.3g}]" if beta.fit_range else "—"
     return (
-        {
-            "claim": "the packed wire is a coil: E L/B = (2Λ)^1/2 (ours, docs/continuum.md, "
-            "an argument)",
-            "source": "docs/continuum.md, 'Strong confinement' (not the paper)",
-            "measured": f"E L/B/(2Λ)^1/2 = {m.value:.3g} ± {m.sigma:.2g} at {top}; fraction of "
-            f"stages at equilibrium {frac:.3f}",
-            "criterion": "within 20 % of 1 (the coil's ends and its inner S add a few %)",
-            "verdict": "not measured" if not np.isfinite(m.value) else
-            ("agrees (within 20 %)" if coil_ok else "differs"),
-        },
-        {
-            "claim": "loops grow as the turns of a coil: n ∝ (L/ℓ)^β, β = 1 (ours, an argument)",
-            "source": "docs/continuum.md, 'Strong confinement' (not the paper)",
-            "measured": f"β = {beta.value:.3f} ± {beta.sigma:.3f} over L/ℓ ∈ {fr} (stages with "
+        _coil_claim(
+            "the packed wire is a coil: E L/B = (2Λ)^1/2",
+            f"E L/B/(2Λ)^1/2 = {m.value:.3g} ± {m.sigma:.2g} at {top}; fraction of stages at "
+            f"equilibrium {frac:.3f}",
+            "within 20 % of 1 (the coil's ends and its inner S add a few %)",
+            m.value,
+            "agrees (within 20 %)" if coil_ok else "differs",
+        ),
+        _coil_claim(
+            "loops grow as the turns of a coil: n ∝ (L/ℓ)^β, β = 1",
+            f"β = {beta.value:.3f} ± {beta.sigma:.3f} over L/ℓ ∈ {fr} (stages with "
             f"≥ {MIN_LOOPS} loops)",
-            "criterion": "|β − 1| ≤ 2σ",
-            "verdict": "not measured" if not np.isfinite(beta.value) else
-            ("agrees (within 2σ)" if loop_ok else "differs"),
-        },
-    )  # fmt: skip
+            "|β − 1| ≤ 2σ",
+            beta.value,
+            "agrees (within 2σ)" if loop_ok else "differs",
+        ),
+    )
 
 
 def measure(ctx: Context) -> Record:
@@ -175,6 +183,19 @@ def measure(ctx: Context) -> Record:
     )  # fmt: skip
 
 
+def _positive(y):
+    return np.where(y > 0, y, np.nan)
+
+
+def _replicas_loglog(ax, x, ys, perfect) -> None:
+    """Replicas (grey), their mean (black) and the perfect wire (red) on log axes."""
+    for y in ys:
+        ax.loglog(x, _positive(y), "-", color="0.7", lw=1)
+    ax.loglog(x, _positive(perfect), "r.", ms=4, label="perfect wire")
+    ax.loglog(x, _positive(nan_quiet(np.nanmean, ys, axis=0)), "ko-", ms=3,
+              label="disorder, mean")  # fmt: skip
+
+
 def draw(rec: Record) -> dict:
     """Energy by term over the coil's, contacts per segment, loops against L/ℓ."""
     import matplotlib.pyplot as plt
@@ -195,27 +216,18 @@ def draw(rec: Record) -> dict:
     a.set_xlabel("Λ")
     a.set_ylabel("E L/B / (2Λ)^1/2")
     a.legend(fontsize=7)
-    for y in d["contacts"]:
-        b.loglog(x, np.where(y > 0, y, np.nan), "-", color="0.7", lw=1)
-    b.loglog(x, np.where(d["contacts_pf"] > 0, d["contacts_pf"], np.nan), "r.", ms=4,
-             label="perfect wire")  # fmt: skip
-    m = nan_quiet(np.nanmean, d["contacts"], axis=0)
-    b.loglog(x, np.where(m > 0, m, np.nan), "ko-", ms=3, label="disorder, mean")
+    _replicas_loglog(b, x, d["contacts"], d["contacts_pf"])
     b.set_xlabel("Λ")
     b.set_ylabel("contacts per segment")
     b.legend(fontsize=7)
     xl = x**0.25
-    for y in d["loops"]:
-        c.loglog(xl, np.where(y > 0, y, np.nan), "-", color="0.7", lw=1)
-    c.loglog(xl, np.where(d["loops_pf"] > 0, d["loops_pf"], np.nan), "r.", ms=4,
-             label="perfect wire")  # fmt: skip
-    ml = nan_quiet(np.nanmean, d["loops"], axis=0)
-    c.loglog(xl, np.where(ml > 0, ml, np.nan), "ko-", ms=3, label="disorder, mean")
+    _replicas_loglog(c, xl, d["loops"], d["loops_pf"])
     c.loglog(xl, COIL_LOOPS * xl, "b--", label="coil 2^1/4 L/(2πℓ)")
     beta = d["beta"]
     if beta.fit_range is not None and np.isfinite(beta.value):
         lo, hi = beta.fit_range
         xf = np.geomspace(lo, hi, 20)
+        ml = nan_quiet(np.nanmean, d["loops"], axis=0)
         ok = np.isfinite(ml) & (xl >= lo) & (xl <= hi) & (ml > 0)
         if ok.any():
             k = float(np.exp(np.mean(np.log(ml[ok]) - beta.value * np.log(xl[ok]))))
