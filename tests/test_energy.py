@@ -697,6 +697,93 @@ def test_hessian_dense_or_sparse_by_size():
 
 
 # --------------------------------------------------------------------------------------------
+# The Hessian's product in element form (WireEnergy.hessian_action)
+# --------------------------------------------------------------------------------------------
+
+
+def action_cases():
+    """(energy, positions): free chains (elastic, plastic, rest angles, both confinements),
+    contacts at interior and end points, and a wire against the cavity's wall."""
+    n = 12
+    pos = free_chain(0, n, seg=1 / n, max_turn=2.0, stretch=0.2)
+    rest = np.random.default_rng(3).normal(0.0, 0.3, n - 1)
+    yield WireEnergy(Wire(k_b=5, k_s=2e3, n_segments=n, trap_center=(0.1, 0)), 250.0), pos
+    plastic = Wire(k_b=5, k_s=2e3, n_segments=n, plasticity=Plasticity(s=0.2, theta_p=0.4),
+                   confinement="per-node")  # fmt: skip
+    yield WireEnergy(plastic, 30.0, rest_angles=rest), pos
+    m, seg = 7, 1.0 / 14
+    contact = Wire(k_b=4, k_s=1e3, n_segments=2 * m, hard_core=0.3 * seg, hard_core_energy=0.05)
+    yield WireEnergy(contact, 100.0), staggered_hairpin(m, seg, 0.5 * contact.hard_core)
+    end = end_contact(5, 0.1, 0.3 * 0.3 * 0.1)
+    n_end = len(end) - 1
+    yield WireEnergy(Wire(k_b=1, k_s=1e2, n_segments=n_end, length=n_end * 0.1,
+                          hard_core=0.03, hard_core_energy=1.0), 0.0), end  # fmt: skip
+    arc = regular_arc(16, 11, radius=1.0 - 0.5e-4)  # every node at δ = d/2 from the wall
+    arc[::2] *= 1.0 - 0.2e-4 / np.hypot(*arc[::2].T)[:, None]
+    walled = Wire(k_b=1, k_s=1e3, n_segments=10, length=10 * 0.39, cavity_radius=1.0,
+                  hard_core=1e-4)  # fmt: skip
+    yield WireEnergy(walled, 1.0), arc
+
+
+@pytest.mark.parametrize("case", range(5))
+def test_hessian_action_is_the_assembled_hessian_times_v(case):
+    energy, pos = list(action_cases())[case]
+    h = energy.hessian(pos, dense=True)
+    rng = np.random.default_rng(case)
+    for _ in range(3):
+        v = rng.standard_normal(pos.size)
+        hv = energy.hessian_action(pos, v)
+        assert hv.shape == (pos.size,)
+        np.testing.assert_allclose(hv, h @ v, rtol=0, atol=1e-10 * np.max(np.abs(h @ v)))
+
+
+@pytest.mark.parametrize("case", range(5))
+def test_hessian_action_is_the_derivative_of_the_gradient(case):
+    energy, pos = list(action_cases())[case]
+    v = np.random.default_rng(10 + case).standard_normal(pos.shape)
+    step = 1e-7 * np.max(np.abs(pos)) / np.max(np.abs(v))
+    if energy.wire.hard_core < 1:  # stay inside the hard core's smooth region
+        step = min(step, 1e-4 * energy.wire.hard_core)
+    fd = (energy(pos + step * v)[1] - energy(pos - step * v)[1]).ravel() / (2 * step)
+    hv = energy.hessian_action(pos, v.ravel())
+    np.testing.assert_allclose(hv, fd, rtol=0, atol=1e-5 * np.max(np.abs(hv)))
+
+
+def straight_equilibrium(wire, lam):
+    """The straight wire along x in equilibrium in the trap (compressed), by the fixed point of
+    its tensions: T_j = Σ_{i <= j} 2 λ w_i x_i, l_j = l0 + T_j / k_s."""
+    energy = WireEnergy(wire, lam)
+    x = np.linspace(-0.5 * wire.length, 0.5 * wire.length, wire.n_nodes)
+    for _ in range(20):
+        tension = np.cumsum(2 * lam * energy.weights * x)[:-1]
+        x = np.concatenate([[0.0], np.cumsum(wire.rest_length + tension / wire.k_s)])
+        x -= 0.5 * x[-1]
+    return energy, np.c_[x, np.zeros_like(x)]
+
+
+def test_hessian_action_keeps_the_continuum_curvature_at_n_1e5():
+    """A smooth transverse mode of the straight wire at N = 10⁵ (6 k_b/l² = 3 × 10¹⁴): vᵀHv in
+    element form is the continuum's ∫ [B v''² + 2λ v² + T v'²] ds (to the O(1/N) of the ends and
+    the 10⁻⁴ compression of the wire), the assembled matrix's product is not."""
+    lam, bending, n = 2.0, 0.05, 100_000
+    wire = Wire.from_continuum(bending=bending, stretching=5000, n_segments=n, hard_core=1e-6)
+    energy, pos = straight_equilibrium(wire, lam)
+    assert np.max(np.abs(energy(pos)[1])) < 1e-6
+    q = np.pi / wire.length
+    s = pos[:, 0] + 0.5 * wire.length
+    v = np.c_[np.zeros(n + 1), np.sin(q * s + 0.3)].ravel()
+    sf = np.linspace(0.0, wire.length, 200_001)
+    vf = np.sin(q * sf + 0.3)
+    tension = -lam * (wire.length**2 / 4 - (sf - wire.length / 2) ** 2)
+    continuum = np.trapezoid(bending * q**4 * vf**2 + 2 * lam * vf**2
+                             + tension * q**2 * np.cos(q * sf + 0.3) ** 2, sf)  # fmt: skip
+    element = float(v @ energy.hessian_action(pos, v))
+    assembled = float(v @ (energy.hessian_csc(pos) @ v))
+    assert element == pytest.approx(continuum, rel=2e-4)
+    assert abs(assembled - continuum) > 0.1 * abs(continuum)
+
+
+# --------------------------------------------------------------------------------------------
 # Invariants (hypothesis)
 # --------------------------------------------------------------------------------------------
 

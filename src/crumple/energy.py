@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .energy_action import _hessian_action
 from .energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
 from .energy_kernels import (
     _barrier_rows,
@@ -450,6 +451,23 @@ class WireEnergy:
             self._pattern = self._new_pattern(ks, self._js, rows, cols, x.size)
         _, _, indptr, indices, where = self._pattern
         return CSC(_scatter_add(where, vals, indices.shape[0]), indices, indptr)
+
+    def hessian_action(self, x, v) -> np.ndarray:
+        """The exact Hessian times ``v`` (over ``x.ravel()``), in element form: flat (x.size,).
+
+        The matrix of :meth:`hessian`, applied joint by joint and segment by segment to the
+        differences of v along the wire, never through assembled node-coordinate entries
+        (:mod:`crumple.energy_action`): for a smooth v at large N it keeps the curvature that
+        the assembled entries' round-off hides (``x`` trusted as in :meth:`hessian_csc`).
+        """
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        v = np.ascontiguousarray(v, dtype=np.float64).reshape(x.shape)
+        w = self.wire
+        ks, js = self._pairs(x)
+        return _hessian_action(
+            x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s, w.rest_length, self.lam,
+            self.weights, ks, js, w.hard_core, w.hard_core_energy, self._radius, v,
+        )  # fmt: skip
 
     def _triplets(self, x, project_contacts, project_bending):
         w = self.wire
