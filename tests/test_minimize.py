@@ -636,3 +636,99 @@ def test_the_gauge_is_fixed_where_the_mode_is_largest_now():
         assert np.flatnonzero(pin).tolist() == [j]
         assert w @ (h @ w) + pin[j] * w[j] ** 2 > 0
     assert _gauge_pin(h, np.zeros((0, 6))) is None
+
+
+# --------------------------------------------------------------------------------------------
+# Newton: stability where the assembled Hessian cannot resolve it (hess_action)
+# --------------------------------------------------------------------------------------------
+
+STIFF = 1e15  # the chain's springs: ε_mach × 2 STIFF ≈ 0.44, far above τ = 1e-3
+
+
+def stiff_chain(soft):
+    """E = ½ Σ STIFF (x_{i+1} - x_i)² + ½ soft Σ x_i², n = 20; its exact H v (by differences)
+    and an 'assembled' H whose entries are off by less than their round-off: -0.5 u uᵀ along
+    the uniform mode u (0.025 per entry), enough to make H + τI indefinite when soft < 0.5."""
+    n = 20
+    lap = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
+    lap[0, 0] = lap[-1, -1] = 1.0
+    exact = STIFF * lap + soft * np.eye(n)
+
+    def fun(x):
+        return 0.5 * float(x @ (exact @ x)), exact @ x
+
+    def action(x, v):
+        d = np.diff(v)
+        return STIFF * (np.concatenate([[0.0], d]) - np.concatenate([d, [0.0]])) + soft * v
+
+    assembled = exact - 0.5 * np.full((n, n), 1.0 / n)
+    return fun, (lambda x: sp.csc_matrix(assembled)), action, n
+
+
+def test_stability_below_the_assembled_resolution_is_decided_by_the_accurate_product():
+    """At the true minimum x = 0 (lowest eigenvalue 0.1) the assembled matrix, wrong within its
+    round-off, has a negative eigenvalue: without an accurate product the solver cannot step
+    down and reports it; with one, LOBPCG on it finds 0.1 and the point is accepted."""
+    fun, hess, action, n = stiff_chain(soft=0.1)
+    x0 = np.zeros(n)
+    blind = newton(fun, x0, hess=hess, curvature_tol=1e-3)
+    assert not blind.converged
+    assert "negative curvature that no step lowers" in blind.message
+    r = newton(fun, x0, hess=hess, curvature_tol=1e-3, hess_action=action)
+    assert r.converged, r.message
+    assert "stable by the accurate Hessian product: lowest eigenvalue 0.1 " in r.message
+    np.testing.assert_array_equal(r.x, x0)
+
+
+def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product():
+    """Soft spring negative (-0.1): the minimum x = 0 is a maximum along u, and the accurate
+    product confirms the assembled count; the stop is the same as without it."""
+    fun, hess, action, n = stiff_chain(soft=-0.1)
+    blind = newton(fun, np.zeros(n), hess=hess, curvature_tol=1e-3)
+    r = newton(fun, np.zeros(n), hess=hess, curvature_tol=1e-3, hess_action=action)
+    assert not r.converged
+    assert r.message == blind.message
+    np.testing.assert_array_equal(r.x, blind.x)
+
+
+def test_fixed_rows_reach_the_accurate_product_as_the_identity():
+    """A fixed coordinate (here one decoupled from the chain) is the identity in the product
+    too: the accurate check of the constrained problem accepts the minimum."""
+    fun, hess, action, n = stiff_chain(soft=0.1)
+
+    def fun2(x):
+        e, g = fun(x[:n])
+        return e + 0.5 * x[n] ** 2, np.append(g, x[n])
+
+    def action2(x, v):
+        assert v[n] == 0.0  # the fixed entry is removed before the caller's product
+        return np.append(action(x[:n], v[:n]), v[n])
+
+    hess2 = lambda x: sp.block_diag([hess(x[:n]), sp.eye(1)]).tocsc()  # noqa: E731
+    fixed = np.zeros(n + 1, dtype=bool)
+    fixed[n] = True
+    x0 = np.zeros(n + 1)
+    x0[n] = 0.3
+    r = newton(fun2, x0, hess=hess2, curvature_tol=1e-3, hess_action=action2, fixed=fixed)
+    assert r.converged, r.message
+    assert "stable by the accurate Hessian product: lowest eigenvalue 0.1 " in r.message
+    assert r.x[n] == 0.3
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+@pytest.mark.parametrize("x0", [[1e-3, 0.0], [0.0, 0.0], [-0.5, 0.0]])
+def test_an_accurate_product_leaves_a_resolved_problem_bitwise_unchanged(x0, sparse):
+    """Where the assembled matrix resolves τ (here everywhere), hess_action is never called:
+    the saddle escape and every number of the result are those without it."""
+    hess = (lambda x: sp.csc_matrix(saddle_hess(x))) if sparse else saddle_hess
+
+    def action(x, v):
+        raise AssertionError("called where the assembled Hessian resolves τ")
+
+    a = newton(saddle, x0, hess=hess)
+    b = newton(saddle, x0, hess=hess, hess_action=action)
+    assert a.message == b.message and "escape" in a.message
+    np.testing.assert_array_equal(a.x, b.x)
+    assert (a.energy, a.iterations, a.evaluations, a.factorizations) == (
+        b.energy, b.iterations, b.evaluations, b.factorizations,
+    )  # fmt: skip

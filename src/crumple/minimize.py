@@ -32,6 +32,7 @@ import scipy.sparse as sp
 
 from .linalg import CSC, LDLT
 from .linalg_springs import new_rows, spring_step
+from .minimize_accurate import _accurate_check, _constrained_action
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
@@ -68,6 +69,7 @@ def newton(
     callback: Callable[[int, np.ndarray, float, float], None] | None = None,
     fixed=None,
     barriers: Callable[[np.ndarray, np.ndarray], tuple] | None = None,
+    hess_action: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -162,6 +164,13 @@ def newton(
         distance d is invisible to a quadratic model taken outside it, so without this the
         step runs into it and is cut by ``step_limit``; with it the model sees the barrier's
         curvature at its edge before entering. The energy is unchanged: only the step is.
+    hess_action : callable, optional
+        ``hess_action(x, v) -> H v`` (flat, x.size): the Hessian's product, computed more
+        accurately than the assembled ``hess(x)`` can be (e.g. element by element). Used only
+        where the inertia count finds negative curvature that the assembled matrix cannot
+        resolve (its resolution, ``minimize_accurate._assembly_resolution``, above τ): the
+        lowest eigenvalue of (H, M) is then found by LOBPCG on this product, and the point is
+        a minimum if it is >= -τ (LOBPCG settled); else the escape is as without it.
 
     Returns
     -------
@@ -184,6 +193,7 @@ def newton(
     mask = _fixed_mask(fixed, x)
     if mask is not None:
         fun, hess, hess_fallback = _constrained(mask, fun, hess, hess_fallback)
+        hess_action = _constrained_action(mask, hess_action)
     if feasible is not None and not feasible(x):
         raise ValueError("the starting point is not feasible")
     e, g = fun(x)
@@ -192,6 +202,7 @@ def newton(
     st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
     st.radius = math.inf if max_step is None else float(max_step)
     st.zero_modes = zero_modes
+    st.hess_action = hess_action
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -228,13 +239,10 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     check = ldl.factorize(h, shift=floor)
     modes = _modes(zero_modes, st.x, m)
     if _negative_count(check, modes) == 0:
-        if st.fmax > ftol:
-            return (
-                f"converged to the force resolution: max force {st.fmax:.3g} <= "
-                f"{st.fres:.3g}, the force change of a one-ulp move ({ftol:.3g} is "
-                "below what float64 positions resolve)"
-            )
-        return f"converged: max force {st.fmax:.3g} <= {ftol:.3g}"
+        return _converged(st, ftol)
+    stable = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
+    if stable is not None:
+        return _converged(st, ftol) + stable
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
@@ -243,6 +251,17 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1
     return None
+
+
+def _converged(st, ftol) -> str:
+    """The stop message of a minimum: converged, or converged to the force resolution."""
+    if st.fmax > ftol:
+        return (
+            f"converged to the force resolution: max force {st.fmax:.3g} <= "
+            f"{st.fres:.3g}, the force change of a one-ulp move ({ftol:.3g} is "
+            "below what float64 positions resolve)"
+        )
+    return f"converged: max force {st.fmax:.3g} <= {ftol:.3g}"
 
 
 def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit, feasible,
@@ -351,6 +370,7 @@ class _State:
     factor: object = None  # the factor the last direction was solved with
     model: tuple | None = None  # (matrix, shift) it is the factor of; None: not known
     zero_modes: Callable | None = None
+    hess_action: Callable | None = None  # the accurate H v, or None
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
 

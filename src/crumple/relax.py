@@ -151,6 +151,9 @@ def minimize_wire(
             zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
             fixed=fixed,
             barriers=energy.barriers if anticipate_contacts else None,
+            # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
+            # element-form product (crumple.energy_action); unused wherever it can
+            hess_action=energy.hessian_action,
         )
     if method == "powell":
         if rng is None:

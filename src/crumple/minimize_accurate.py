@@ -1,0 +1,163 @@
+"""The stability test where an assembled Hessian cannot decide it. Private, model-blind.
+
+:func:`crumple.minimize.newton` counts the negative eigenvalues of H + τM by the inertia of
+one LDLᵀ of the assembled H. The entries of an assembled H are exact only to ε_mach times
+the largest of them, and when that, per unit of the metric M, exceeds τ the count can see
+negative curvature that is round-off (a stiff wire of 10⁵ segments: docs/performance.md,
+"N = 10⁵ fails"). There, and only there, a caller's accurate product ``hess_action(x, v)``
+decides instead: the lowest eigenvalue of (H, M) by LOBPCG on that product.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .linalg import CSC
+
+#: How many ε_mach × max_j |H_jj| the round-off of an assembled Hessian's entries is taken to
+#: be (:func:`_assembly_resolution`). A diagonal entry of a chain sums the blocks of up to three
+#: joints and two segments, each exact to a few ε of itself, and the factorisation adds its own
+#: round-off of the same order: 4 is that count, not a proven bound. It only decides when an
+#: inertia count that found negative curvature is checked again with the caller's accurate
+#: product (``hess_action``), never that a point is stable: too large a value costs an
+#: eigensolve, too small one leaves the count to decide where it cannot.
+ASSEMBLY_ROUNDOFF = 4.0
+#: LOBPCG on the accurate product: the shift of the preconditioner's factor, H + σM with σ this
+#: fraction of the assembled resolution. Measured at N = 10⁵ (straight wire, λ = 2, two
+#: spurious negative pivots): with the modified factor of H alone (no shift) the lowest Ritz
+#: value stalled at 4.009 (true 4) and the second at 8.04 (true 4); with σ = 0.1 and 1 ×
+#: the resolution it reached 4.0000 in 12 and 21 iterations. Below the resolution the factor
+#: is the noise of the assembled low modes, above it a smooth (H + σM)⁻¹ of all of them.
+PRECONDITIONER_SHIFT = 0.1
+#: Iterations at most, and the convergence test: the lowest Ritz value moved by less than
+#: ACCURATE_RTOL × (|μ| + τ) over the last ACCURATE_WINDOW iterations. Not a residual: at
+#: N = 10⁵ the residual of an M-normalised vector is floored at ~10³ per unit length by the
+#: round-off of its stiff components alone (ε_mach × the top eigenvalue, ~10¹⁹), while the
+#: Ritz values, a quadratic form, are exact to ~10⁻⁵ relative (measured).
+ACCURATE_MAXITER = 100
+ACCURATE_RTOL = 1e-4
+ACCURATE_WINDOW = 5
+
+
+def _assembly_resolution(h, m) -> float:
+    """The eigenvalue resolution of an assembled H in the metric M (per unit of M):
+    ``ASSEMBLY_ROUNDOFF`` × ε_mach × max_j |H_jj| / min_j M_jj. Below it the pencil's
+    eigenvalues of the assembled matrix are round-off: its inertia cannot tell the sign of a
+    curvature smaller than this."""
+    hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
+    diag = np.abs(hs.diagonal())
+    top = float(np.max(diag)) if diag.size else 0.0
+    return ASSEMBLY_ROUNDOFF * float(np.finfo(float).eps) * top / float(np.min(m))
+
+
+def _m_orthonormal(s, m, modes=None, drop=1e-8):
+    """An M-orthonormal basis of the span of s's columns in the M-complement of ``modes``,
+    directions of relative weight below ``drop`` left out (they are round-off)."""
+    if modes is not None:
+        mw = m[:, None] * modes
+        s = s - modes @ np.linalg.solve(modes.T @ mw, mw.T @ s)
+    norm = np.sqrt(np.sum(m[:, None] * s * s, axis=0))
+    s = s[:, (norm > 0) & np.isfinite(norm)] / norm[(norm > 0) & np.isfinite(norm)]
+    if s.shape[1] == 0:
+        return s
+    g = s.T @ (m[:, None] * s)
+    w, u = np.linalg.eigh(0.5 * (g + g.T))
+    keep = w > drop * w[-1]
+    return s @ (u[:, keep] / np.sqrt(w[keep]))
+
+
+def _lobpcg(action, m, x, precondition, modes, tau, history):
+    """The lowest Ritz pairs of (H, M) from the block x, H applied by ``action`` (LOBPCG,
+    Knyazev 2001). Unlike SciPy's, the block X is kept exactly in every Rayleigh–Ritz basis
+    (the other directions orthogonalised against it): an X re-orthonormalised with them loses
+    round-off that the stiff modes (eigenvalues ~10¹⁹ at N = 10⁵) weight enormously, and its
+    Ritz values then jump up (measured: -7.906 to -4.6). The lowest Ritz value of every
+    iteration goes to ``history``. Returns (values, vectors, settled)."""
+    ax = lambda b: np.column_stack([action(c) for c in b.T])  # noqa: E731
+    x = _m_orthonormal(x, m, modes)
+    k = x.shape[1]
+    mu, c = np.linalg.eigh(_sym(x.T @ ax(x)))
+    x, p = x @ c, None
+    for _ in range(ACCURATE_MAXITER):
+        r = ax(x) - (m[:, None] * x) * mu
+        z = np.column_stack([precondition(col) for col in r.T] + ([] if p is None else [p]))
+        for _ in range(2):
+            z = _m_orthonormal(z - x @ (x.T @ (m[:, None] * z)), m, modes)
+        if z.shape[1] == 0:  # x spans all there is (a small problem): its Ritz values are exact
+            return mu, x, True
+        basis = np.column_stack([x, z])
+        vals, c = np.linalg.eigh(_sym(basis.T @ ax(basis)))
+        xn = basis @ c[:, :k]
+        p = xn - x @ (x.T @ (m[:, None] * xn))
+        x, mu = xn, vals[:k]
+        history.append(float(mu[0]))
+        recent = history[-ACCURATE_WINDOW:]
+        if len(recent) == ACCURATE_WINDOW and max(recent) - min(recent) <= ACCURATE_RTOL * (
+            abs(mu[0]) + tau
+        ):
+            return mu, x, True
+    return mu, x, False
+
+
+def _sym(a):
+    return 0.5 * (a + a.T)
+
+
+def _accurate_lowest(h, m, ldl, floor, modes, action, check):
+    """The lowest eigenpair of the pencil (H, M) with H applied by ``action`` (accurate where
+    the assembled H is not): :func:`_lobpcg` preconditioned by the factor of the assembled
+    H + σM (σ = ``PRECONDITIONER_SHIFT`` × its resolution, pivots floored), started from the
+    factor's negative direction and two random vectors in the M-complement of the zero modes,
+    as ``minimize_modes._lowest_mode``. Returns (μ, converged, v, iterations): μ the lowest
+    Ritz value, converged whether it settled (:data:`ACCURATE_RTOL`)."""
+    hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
+    n = hs.shape[0]
+    tau = float(floor[0] / m[0])
+    sigma = PRECONDITIONER_SHIFT * _assembly_resolution(hs, m)
+    pre = ldl.factorize(hs, shift=sigma * m, floor=floor)
+    rng = np.random.default_rng(0)  # fixed: results reproducible
+    v0 = check.negative_direction()
+    start = [rng.standard_normal((n, 2))] + ([] if v0 is None else [v0[:, None]])
+    history: list[float] = []
+    with np.errstate(all="ignore"):
+        mu, x, settled = _lobpcg(action, m, np.column_stack(start), pre.solve, modes, tau, history)
+    converged = settled and bool(np.isfinite(mu[0]))
+    return float(mu[0]), converged, x[:, 0], len(history)
+
+
+def _accurate_check(st, h, m, ldl, floor, modes, check):
+    """At an equilibrium whose inertia count found negative curvature: the converged message's
+    addition when ``st.hess_action`` shows the point stable where the assembled H cannot
+    resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None."""
+    if st.hess_action is None:
+        return None
+    tau = float(floor[0] / m[0])
+    res = _assembly_resolution(h, m)
+    if not res > tau:
+        return None
+    mu, converged, _, its = _accurate_lowest(
+        h, m, ldl, floor, modes, lambda v: st.hess_action(st.x, v), check
+    )
+    if mu >= -tau and converged:
+        return (
+            f"; stable by the accurate Hessian product: lowest eigenvalue {mu:.6g} >= -{tau:.3g} "
+            f"({its} LOBPCG iterations), below the assembled matrix's resolution {res:.3g}"
+        )
+    return None
+
+
+def _constrained_action(mask, hess_action):
+    """``hess_action`` of the constrained Hessian (``minimize._constrained``): v's fixed
+    entries removed, and the identity's on them."""
+    if hess_action is None:
+        return None
+
+    def action(x, v):
+        w = np.array(v, dtype=np.float64).ravel()
+        w[mask] = 0.0
+        out = np.array(hess_action(x, w), dtype=np.float64).ravel()
+        out[mask] = np.asarray(v, dtype=np.float64).ravel()[mask]
+        return out
+
+    return action
