@@ -641,60 +641,79 @@ def test_the_gauge_is_fixed_where_the_mode_is_largest_now():
 # --------------------------------------------------------------------------------------------
 # Newton: stability where the assembled Hessian cannot resolve it (hess_action)
 # --------------------------------------------------------------------------------------------
+# A stiff chain in a tiny metric: its resolution ASSEMBLY_ROUNDOFF ε max|H_jj| / min M ≈ 1.8 per
+# unit metric exceeds τ = 1e-3, so an inertia count that finds negative curvature is checked
+# with the accurate product. The 'assembled' Hessian is made wrong along the soft modes on
+# purpose (±0.5), so that the tests see which of the two decided.
 
-STIFF = 1e15  # the chain's springs: ε_mach × 2 STIFF ≈ 0.44, far above τ = 1e-3
+N_CHAIN, STIFF, METRIC = 20, 1e6, 1e-9
 
 
 def stiff_chain(soft):
-    """E = ½ Σ STIFF (x_{i+1} - x_i)² + ½ soft Σ x_i², n = 20; its exact H v (by differences)
-    and an 'assembled' H whose entries are off by less than their round-off: -0.5 u uᵀ along
-    the uniform mode u (0.025 per entry), enough to make H + τI indefinite when soft < 0.5."""
-    n = 20
+    """E = ½ Σ STIFF (x_{i+1} - x_i)² + ½ soft Σ x_i² + ¼ Σ x_i⁴ (the quartic bounds a negative
+    soft): (fun, exact Hessian, its product by differences)."""
+    n = N_CHAIN
     lap = 2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
     lap[0, 0] = lap[-1, -1] = 1.0
-    exact = STIFF * lap + soft * np.eye(n)
 
     def fun(x):
-        return 0.5 * float(x @ (exact @ x)), exact @ x
+        e = 0.5 * STIFF * float(np.sum(np.diff(x) ** 2)) + 0.5 * soft * float(x @ x)
+        return e + 0.25 * float(np.sum(x**4)), STIFF * (lap @ x) + soft * x + x**3
+
+    def exact(x):
+        return STIFF * lap + np.diag(soft + 3 * x**2)
 
     def action(x, v):
         d = np.diff(v)
-        return STIFF * (np.concatenate([[0.0], d]) - np.concatenate([d, [0.0]])) + soft * v
+        stiff = np.concatenate([[0.0], d]) - np.concatenate([d, [0.0]])
+        return STIFF * stiff + (soft + 3 * x**2) * v
 
-    assembled = exact - 0.5 * np.full((n, n), 1.0 / n)
-    return fun, (lambda x: sp.csc_matrix(assembled)), action, n
+    return fun, exact, action
+
+
+def uniform_mode(scale):
+    return scale * np.full((N_CHAIN, N_CHAIN), 1.0 / N_CHAIN)
+
+
+def chain_newton(fun, hess, **kw):
+    size = kw.pop("size", N_CHAIN)
+    return newton(fun, np.zeros(size), hess=hess, curvature_tol=1e-3,
+                  metric=np.full(size, METRIC), **kw)  # fmt: skip
 
 
 def test_stability_below_the_assembled_resolution_is_decided_by_the_accurate_product():
-    """At the true minimum x = 0 (lowest eigenvalue 0.1) the assembled matrix, wrong within its
-    round-off, has a negative eigenvalue: without an accurate product the solver cannot step
-    down and reports it; with one, LOBPCG on it finds 0.1 and the point is accepted."""
-    fun, hess, action, n = stiff_chain(soft=0.1)
-    x0 = np.zeros(n)
-    blind = newton(fun, x0, hess=hess, curvature_tol=1e-3)
+    """At the true minimum x = 0 (soft 0.1) the 'assembled' H has a negative eigenvalue along
+    the uniform mode: without an accurate product the solver cannot step down and says so;
+    with one, LOBPCG on it finds 0.1 / METRIC and the point is accepted."""
+    fun, exact, action = stiff_chain(soft=0.1)
+    hess = lambda x: sp.csc_matrix(exact(x) - uniform_mode(0.5))  # noqa: E731
+    blind = chain_newton(fun, hess)
     assert not blind.converged
     assert "negative curvature that no step lowers" in blind.message
-    r = newton(fun, x0, hess=hess, curvature_tol=1e-3, hess_action=action)
+    r = chain_newton(fun, hess, hess_action=action)
     assert r.converged, r.message
-    assert "stable by the accurate Hessian product: lowest eigenvalue 0.1 " in r.message
-    np.testing.assert_array_equal(r.x, x0)
+    assert "stable by the accurate Hessian product: lowest eigenvalue 1e+08 " in r.message
+    np.testing.assert_array_equal(r.x, 0.0)
 
 
 def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product():
-    """Soft spring negative (-0.1): the minimum x = 0 is a maximum along u, and the accurate
-    product confirms the assembled count; the stop is the same as without it."""
-    fun, hess, action, n = stiff_chain(soft=-0.1)
-    blind = newton(fun, np.zeros(n), hess=hess, curvature_tol=1e-3)
-    r = newton(fun, np.zeros(n), hess=hess, curvature_tol=1e-3, hess_action=action)
-    assert not r.converged
+    """Soft spring negative (-0.1), H exact: x = 0 is a maximum along the uniform mode, the
+    accurate product confirms the count, and the escape and the rest are those without it."""
+    fun, exact, action = stiff_chain(soft=-0.1)
+    hess = lambda x: sp.csc_matrix(exact(x))  # noqa: E731
+    blind = chain_newton(fun, hess)
+    r = chain_newton(fun, hess, hess_action=action)
+    assert "escape" in blind.message
     assert r.message == blind.message
     np.testing.assert_array_equal(r.x, blind.x)
+    assert (r.iterations, r.evaluations) == (blind.iterations, blind.evaluations)
 
 
 def test_fixed_rows_reach_the_accurate_product_as_the_identity():
     """A fixed coordinate (here one decoupled from the chain) is the identity in the product
     too: the accurate check of the constrained problem accepts the minimum."""
-    fun, hess, action, n = stiff_chain(soft=0.1)
+    fun, exact, action = stiff_chain(soft=0.1)
+    n = N_CHAIN
 
     def fun2(x):
         e, g = fun(x[:n])
@@ -704,14 +723,17 @@ def test_fixed_rows_reach_the_accurate_product_as_the_identity():
         assert v[n] == 0.0  # the fixed entry is removed before the caller's product
         return np.append(action(x[:n], v[:n]), v[n])
 
-    hess2 = lambda x: sp.block_diag([hess(x[:n]), sp.eye(1)]).tocsc()  # noqa: E731
+    def hess2(x):
+        return sp.block_diag([exact(x[:n]) - uniform_mode(0.5), sp.eye(1)]).tocsc()
+
     fixed = np.zeros(n + 1, dtype=bool)
     fixed[n] = True
     x0 = np.zeros(n + 1)
     x0[n] = 0.3
-    r = newton(fun2, x0, hess=hess2, curvature_tol=1e-3, hess_action=action2, fixed=fixed)
+    r = newton(fun2, x0, hess=hess2, curvature_tol=1e-3, metric=np.full(n + 1, METRIC),
+               hess_action=action2, fixed=fixed)  # fmt: skip
     assert r.converged, r.message
-    assert "stable by the accurate Hessian product: lowest eigenvalue 0.1 " in r.message
+    assert "stable by the accurate Hessian product: lowest eigenvalue 1e+08 " in r.message
     assert r.x[n] == 0.3
 
 
@@ -732,3 +754,59 @@ def test_an_accurate_product_leaves_a_resolved_problem_bitwise_unchanged(x0, spa
     assert (a.energy, a.iterations, a.evaluations, a.factorizations) == (
         b.energy, b.iterations, b.evaluations, b.factorizations,
     )  # fmt: skip
+
+
+def test_the_opt_in_accurate_escape_steps_down_where_the_assembled_mode_cannot(monkeypatch):
+    """Two stiff chains: A truly unstable (soft -0.1), B stable (soft 0.1); the 'assembled' H
+    shows them the other way round (±0.5 along their uniform modes). Its lowest mode (B's)
+    goes up: no step lowers the energy. With ``minimize_accurate.ACCURATE_ESCAPE`` the escape
+    takes the accurate lowest mode (A's), goes down to A's minimum, B untouched, and the
+    accurate product accepts it."""
+    import crumple.minimize_accurate as ma
+
+    fa, exact_a, act_a = stiff_chain(soft=-0.1)
+    fb, exact_b, act_b = stiff_chain(soft=0.1)
+    n = N_CHAIN
+
+    def fun(x):
+        (ea, ga), (eb, gb) = fa(x[:n]), fb(x[n:])
+        return ea + eb, np.concatenate([ga, gb])
+
+    def hess(x):
+        a = exact_a(x[:n]) + uniform_mode(0.5)
+        return sp.block_diag([a, exact_b(x[n:]) - uniform_mode(0.5)]).tocsc()
+
+    def action(x, v):
+        return np.concatenate([act_a(x[:n], v[:n]), act_b(x[n:], v[n:])])
+
+    off = chain_newton(fun, hess, hess_action=action, size=2 * n)
+    assert "negative curvature that no step lowers" in off.message and off.energy == 0.0
+    monkeypatch.setattr(ma, "ACCURATE_ESCAPE", True)
+    on = chain_newton(fun, hess, hess_action=action, size=2 * n)
+    assert on.converged, on.message
+    assert "stable by the accurate Hessian product" in on.message
+    np.testing.assert_allclose(np.abs(on.x[:n]), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
+    np.testing.assert_allclose(on.x[n:], 0.0, atol=1e-6)  # the accurate mode is ~0 on B
+
+
+def test_the_opt_in_recheck_of_a_positive_count_finds_the_curvature_it_missed(monkeypatch):
+    """Soft -0.1, the 'assembled' H +0.5 along the uniform mode: its count finds no negative
+    pivot at the maximum x = 0, which is accepted by default. With
+    ``ACCURATE_WHEN_POSITIVE`` the accurate product finds -0.1 / METRIC: the point is refused
+    (the assembled H has no direction to escape along); with ``ACCURATE_ESCAPE`` as well, the
+    solver goes down the accurate mode to the minimum |x_i| = √0.1 and accepts it there."""
+    import crumple.minimize_accurate as ma
+
+    fun, exact, action = stiff_chain(soft=-0.1)
+    hess = lambda x: sp.csc_matrix(exact(x) + uniform_mode(0.5))  # noqa: E731
+    default = chain_newton(fun, hess, hess_action=action)
+    assert default.converged and "accurate" not in default.message  # the count's verdict
+    monkeypatch.setattr(ma, "ACCURATE_WHEN_POSITIVE", True)
+    refused = chain_newton(fun, hess, hess_action=action)
+    assert not refused.converged
+    assert "negative curvature that no step lowers" in refused.message
+    monkeypatch.setattr(ma, "ACCURATE_ESCAPE", True)
+    both = chain_newton(fun, hess, hess_action=action)
+    assert both.converged, both.message
+    assert "stable by the accurate Hessian product" in both.message
+    np.testing.assert_allclose(np.abs(both.x), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2

@@ -32,7 +32,7 @@ import scipy.sparse as sp
 
 from .linalg import CSC, LDLT
 from .linalg_springs import new_rows, spring_step
-from .minimize_accurate import _accurate_check, _constrained_action
+from .minimize_accurate import _accurate_check, _constrained_action, _recheck
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
@@ -238,15 +238,15 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     None after one escape step downhill along the lowest mode (``st`` moved, counted)."""
     check = ldl.factorize(h, shift=floor)
     modes = _modes(zero_modes, st.x, m)
-    if _negative_count(check, modes) == 0:
+    if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
         return _converged(st, ftol)
-    stable = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
+    stable, mode = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
     if stable is not None:
         return _converged(st, ftol) + stable
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
-    if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible):
+    if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode):
         st.unstable = True
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1

@@ -38,6 +38,18 @@ PRECONDITIONER_SHIFT = 0.1
 ACCURATE_MAXITER = 100
 ACCURATE_RTOL = 1e-4
 ACCURATE_WINDOW = 5
+#: Opt-in (off: the escape is the one without an accurate product): where the accurate
+#: eigensolve found a negative eigenvalue, step along *its* mode rather than the assembled
+#: H's lowest mode, which at N = 10⁵ is a round-off direction that no step can go down along
+#: (measured: the straight wire at λ = 7.02, accurate μ = -3.80, stopped with "negative
+#: curvature that no step lowers").
+ACCURATE_ESCAPE = False
+#: Opt-in (off: the count decides when it finds no negative pivot): run the accurate
+#: eigensolve also where the count of an unresolved H found none. At N = 10⁵ the count can
+#: miss true negative curvature as well as invent it (measured: after one accurate escape
+#: from the straight wire at λ = 7.02, μ = -3.80, the count found no negative pivot at a
+#: point of bending energy 3 × 10⁻⁶ and the stage was accepted).
+ACCURATE_WHEN_POSITIVE = False
 
 
 def _assembly_resolution(h, m) -> float:
@@ -49,6 +61,16 @@ def _assembly_resolution(h, m) -> float:
     diag = np.abs(hs.diagonal())
     top = float(np.max(diag)) if diag.size else 0.0
     return ASSEMBLY_ROUNDOFF * float(np.finfo(float).eps) * top / float(np.min(m))
+
+
+def _recheck(st, h, m, floor) -> bool:
+    """Whether a count with no negative pivot is to be checked by the accurate product
+    (:data:`ACCURATE_WHEN_POSITIVE`, a product given, H unresolved)."""
+    return (
+        ACCURATE_WHEN_POSITIVE
+        and st.hess_action is not None
+        and _assembly_resolution(h, m) > float(floor[0] / m[0])
+    )
 
 
 def _m_orthonormal(s, m, modes=None, drop=1e-8):
@@ -127,24 +149,26 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
 
 
 def _accurate_check(st, h, m, ldl, floor, modes, check):
-    """At an equilibrium whose inertia count found negative curvature: the converged message's
-    addition when ``st.hess_action`` shows the point stable where the assembled H cannot
-    resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None."""
+    """At an equilibrium whose inertia count found negative curvature: (suffix, mode). suffix
+    is the converged message's addition when ``st.hess_action`` shows the point stable where
+    the assembled H cannot resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None;
+    mode is (μ, v), the accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE` and
+    μ < -τ, else None."""
     if st.hess_action is None:
-        return None
+        return None, None
     tau = float(floor[0] / m[0])
     res = _assembly_resolution(h, m)
     if not res > tau:
-        return None
-    mu, converged, _, its = _accurate_lowest(
+        return None, None
+    mu, converged, v, its = _accurate_lowest(
         h, m, ldl, floor, modes, lambda v: st.hess_action(st.x, v), check
     )
     if mu >= -tau and converged:
         return (
             f"; stable by the accurate Hessian product: lowest eigenvalue {mu:.6g} >= -{tau:.3g} "
             f"({its} LOBPCG iterations), below the assembled matrix's resolution {res:.3g}"
-        )
-    return None
+        ), None
+    return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None)
 
 
 def _constrained_action(mask, hess_action):

@@ -121,13 +121,17 @@ def _rayleigh(h, m, v) -> float:
     return float(v @ (h @ v)) / den if den > 0 else 0.0
 
 
-def _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible) -> bool:
-    """Step downhill along the lowest mode from an unstable equilibrium; False if no step can."""
+def _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode=None) -> bool:
+    """Step downhill along the lowest mode from an unstable equilibrium; False if no step can.
+    ``mode``: (μ, v) found already (``minimize_accurate``), instead of :func:`_lowest_mode`."""
     import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # LOBPCG's "did not converge" is not an error here
-        mu, v = _lowest_mode(h, m, ldl, check, floor, modes)
+    if mode is not None:
+        mu, v = mode
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # LOBPCG's "did not converge" is not an error here
+            mu, v = _lowest_mode(h, m, ldl, check, floor, modes)
     if v is None or not mu < 0:
         return False
     d = v.reshape(st.x.shape).copy()
