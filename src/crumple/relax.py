@@ -28,6 +28,14 @@ __all__ = ["POWELL_RTOL", "STABILITY_TOL", "minimize_wire", "node_lengths"]
 #: straight wire just above its Euler load has -4 to -27 (N = 10⁴, λ = 7 to 12.6). τ is far
 #: below both and far above round-off (docs/model.md, "Minimisation to equilibrium").
 STABILITY_TOL = 1e-3
+#: Opt-in: decide stability with the element-form Hessian product
+#: (:meth:`crumple.energy.WireEnergy.hessian_action`) where the assembled Hessian's float64
+#: resolution exceeds τ (``minimize_accurate``). Off by default: it fixes the straight wire's
+#: stages at N = 10⁵ (stages 0–9 of the default ramp converged and stable, where every one
+#: stopped before), but it is reachable from N ≈ 1200 for the continuum wire (and at N = 1000
+#: with the continuum study's stiff k_s), where its effect on whole ramps has not been measured
+#: (docs/performance.md, "Stability where float64 cannot assemble it").
+ACCURATE_STABILITY = False
 
 Method = Literal["newton", "powell"]
 
@@ -152,8 +160,8 @@ def minimize_wire(
             fixed=fixed,
             barriers=energy.barriers if anticipate_contacts else None,
             # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
-            # element-form product (crumple.energy_action); unused wherever it can
-            hess_action=energy.hessian_action,
+            # element-form product (crumple.energy_action), opt-in (ACCURATE_STABILITY)
+            hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
         )
     if method == "powell":
         if rng is None:
