@@ -160,6 +160,17 @@ def test_loop_exponent_and_decades_on_known_data():
     assert _decades(lam) == list(range(0, 25, 3))
 
 
+def test_turns_of_known_shapes():
+    from crumple.reproduce.continuum_partition import turns
+
+    t = np.linspace(0, 2 * np.pi * 3.5, 700)  # a spiral of 3.5 turns
+    spiral = np.column_stack([(1 + 0.05 * t) * np.cos(t), (1 + 0.05 * t) * np.sin(t)])
+    assert abs(turns(spiral) - 3.5) < 1e-2
+    s_shape = np.column_stack([np.linspace(0, 1, 50), 0.1 * np.sin(np.linspace(0, 2 * np.pi, 50))])
+    assert turns(s_shape) < 1e-9  # winds one way, then back
+    assert np.isnan(turns(np.full((5, 2), np.nan)))
+
+
 def test_study_smoke_report_is_complete(tmp_path):
     out = tmp_path / "cont"
     rc = main(["study", "continuum", "--profile", "smoke", "--out", str(out), "--workers", "2",
@@ -181,6 +192,6 @@ def test_study_smoke_report_is_complete(tmp_path):
     assert html.count("data:image/png;base64") == 7
     part = res["extra"]["continuum_partition"]
     assert part["fraction_at_equilibrium"] == 1.0
-    assert "energy_over_coil" in part and "loops_beta" in part
+    assert "energy_over_coil" in part and "loops_beta" in part and "turns" in part
     # a store of one profile is not reused for another
     assert main(["study", "continuum", "--quick", "--out", str(out), "--quiet"]) == 2
