@@ -161,13 +161,16 @@ def test_loop_exponent_and_decades_on_known_data():
 
 
 def test_turns_of_known_shapes():
-    from crumple.reproduce.continuum_partition import turns
+    from crumple.reproduce.continuum_partition import net_winding, turns
 
-    t = np.linspace(0, 2 * np.pi * 3.5, 700)  # a spiral of 3.5 turns
+    t = np.linspace(0, 2 * np.pi * 3.5, 700)  # a spiral of 3.5 turns, counter-clockwise
     spiral = np.column_stack([(1 + 0.05 * t) * np.cos(t), (1 + 0.05 * t) * np.sin(t)])
-    assert abs(turns(spiral) - 3.5) < 1e-2
-    s_shape = np.column_stack([np.linspace(0, 1, 50), 0.1 * np.sin(np.linspace(0, 2 * np.pi, 50))])
-    assert turns(s_shape) < 1e-9  # winds one way, then back
+    assert abs(turns(spiral) - 3.5) < 1e-2 and abs(net_winding(spiral) - 3.5) < 1e-2
+    assert abs(net_winding(spiral[::-1]) + 3.5) < 1e-2  # the other way round: clockwise
+    u = np.linspace(0, 2 * np.pi, 400)  # one full circle each way, joined: turns 2, net 0
+    figure8 = np.vstack([np.column_stack([np.sin(u), 1 - np.cos(u)]),
+                         np.column_stack([np.sin(u), np.cos(u) - 1])[1:]])  # fmt: skip
+    assert abs(turns(figure8) - 2.0) < 2e-2 and abs(net_winding(figure8)) < 1e-9
     assert np.isnan(turns(np.full((5, 2), np.nan)))
 
 

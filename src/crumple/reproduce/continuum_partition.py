@@ -10,8 +10,9 @@ wire), as :mod:`.continuum_sweep`. Measures, at every Λ of the sweep, in contin
   (E_b/E_conf = 1);
 * contacts per segment (contacts/N, the fraction of the wire in contact: a contact is a pair
   of non-adjacent segments closer than 2d);
-* the turns, |Σθ|/2π (the winding of the tangent, end to end), against the coil's
-  L/(2πR) = 2^¼ L/(2πℓ);
+* the turns, Σ|θ|/2π (the total curvature over 2π), against the coil's L/(2πR) = 2^¼ L/(2πℓ),
+  and the net winding Σθ/2π (turns counted with their sense: a coil wound one way has the two
+  equal; two halves wound in opposite senses cancel);
 * the number of loops (faces of the wire and its contacts at 2d, :mod:`crumple.loops`) against
   L/ℓ = Λ^¼, with a power law n ∝ (L/ℓ)^β fitted per replica where it has at least 2 loops
   (turns stacked at spacing d form a band, not one face per turn: loops need not follow the
@@ -45,7 +46,7 @@ FIGURES = {
     "perfect wire: dots): (left) the energy by term in units of B/L over (2Λ)^1/2, the coil's "
     "total (dashed at 1; the coil puts 1/2 in bending and 1/2 in the trap); (middle) contacts "
     "per segment; (right) loops against L/ℓ = Λ^1/4 with the coil's 2^1/4 L/(2πℓ) (dashed) "
-    "and the fitted power law (solid, over its range); crosses: the turns |Σθ|/2π (mean)",
+    "and the fitted power law (solid, over its range); crosses: the turns Σ|θ|/2π (mean)",
 }
 TERMS = ("bending", "stretching", "confinement", "hard_core")
 #: Turns per L/ℓ of the coil: n = L/(2πR) with R = 2^-1/4 ℓ.
@@ -77,18 +78,27 @@ def _loop_fit(lam_c, loops) -> Estimate:
 
 
 def turns(x) -> float:
-    """|Σθ|/2π: how many times the tangent winds from one end to the other (NaN if x is not
-    a whole stage)."""
+    """Σ|θ|/2π: the total curvature over 2π (a coil's number of turns, whatever their sense);
+    NaN if x is not a whole stage."""
     x = np.asarray(x, float)
     if not np.isfinite(x).all():
         return math.nan
-    return abs(float(np.sum(turning_angles(x)))) / (2 * math.pi)
+    return float(np.sum(np.abs(turning_angles(x)))) / (2 * math.pi)
 
 
-def _turns(s: Series) -> np.ndarray:
-    """(replica, Λ) turns of every stage of a one-point series."""
+def net_winding(x) -> float:
+    """Σθ/2π: how many times the tangent winds from one end to the other, with its sense
+    (positive counter-clockwise); NaN if x is not a whole stage."""
+    x = np.asarray(x, float)
+    if not np.isfinite(x).all():
+        return math.nan
+    return float(np.sum(turning_angles(x))) / (2 * math.pi)
+
+
+def _per_stage(s: Series, f) -> np.ndarray:
+    """(replica, Λ) values of ``f(positions)`` at every stage of a one-point series."""
     pos = s.positions[0]
-    return np.array([[turns(pos[r, j]) for j in range(pos.shape[1])] for r in range(pos.shape[0])])
+    return np.array([[f(pos[r, j]) for j in range(pos.shape[1])] for r in range(pos.shape[0])])
 
 
 def _mean(a) -> Estimate:
@@ -112,7 +122,7 @@ def _decades(lam_c) -> list[int]:
     return out
 
 
-def _table(lam_c, e, contacts, loops, wind, eq, nrep) -> list[dict]:
+def _table(lam_c, e, contacts, loops, wind, net, eq, nrep) -> list[dict]:
     rows = []
     for j in _decades(lam_c):
         at = f"Λ = {lam_c[j]:.3g}"
@@ -124,10 +134,11 @@ def _table(lam_c, e, contacts, loops, wind, eq, nrep) -> list[dict]:
             _alt(at, "loops", _mean(loops[:, j]), nrep),
             _alt(
                 at,
-                f"turns |Σθ|/2π (coil: {COIL_LOOPS * lam_c[j] ** 0.25:.3g})",
+                f"turns Σ|θ|/2π (coil: {COIL_LOOPS * lam_c[j] ** 0.25:.3g})",
                 _mean(wind[:, j]),
                 nrep,
             ),
+            _alt(at, "net winding Σθ/2π", _mean(net[:, j]), nrep),
             _alt(at, "stages at equilibrium (fraction)", _mean(eq[:, j]), nrep),
         ]
     return rows
@@ -160,9 +171,9 @@ def _claims(e, wind, lam_c, frac) -> tuple[dict, ...]:
             "agrees (within 20 %)" if coil_ok else "differs",
         ),
         _coil_claim(
-            "the wire winds as a coil: |Σθ|/2π = 2^1/4 L/(2πℓ)",
+            "the wire winds as a coil: Σ|θ|/2π = 2^1/4 L/(2πℓ) turns",
             f"turns / (2^1/4 L/(2πℓ)) = {w.value:.3g} ± {w.sigma:.2g} at {top}",
-            "within 20 % of 1 (the S-shaped inner end winds back: it lowers the count)",
+            "within 20 % of 1 (the ends and the S-shaped middle are not on the coil)",
             w.value,
             "agrees (within 20 %)" if wind_ok else "differs",
         ),
@@ -179,10 +190,10 @@ def measure(ctx: Context) -> Record:
     ran = np.isfinite(s.max_force[0])
     eq = np.where(ran, s.converged[0].astype(float), np.nan)
     frac = float(np.nansum(eq) / max(1, ran.sum()))
-    wind = _turns(s)
+    wind, net = _per_stage(s, turns), _per_stage(s, net_winding)
     beta = _loop_fit(lam_c, loops)
     beta_pf = _loop_fit(lam_c, pf.obs["n_loops"][0])
-    alts = _table(lam_c, e, contacts, loops, wind, eq, s.replicas)
+    alts = _table(lam_c, e, contacts, loops, wind, net, eq, s.replicas)
     alts += [
         _alt("loops β in n ∝ (L/ℓ)^β", "disorder replicas", beta, s.replicas),
         _alt("loops β in n ∝ (L/ℓ)^β", "perfect wire", beta_pf, 1),
@@ -194,6 +205,7 @@ def measure(ctx: Context) -> Record:
             "contacts_per_segment": nan_quiet(np.nanmean, contacts, axis=0),
             "loops": nan_quiet(np.nanmean, loops, axis=0),
             "turns": nan_quiet(np.nanmean, wind, axis=0),
+            "net_winding": nan_quiet(np.nanmean, net, axis=0),
             "loops_beta": beta.to_dict(),
             "loops_beta_perfect": beta_pf.to_dict(),
             "coil_loops_per_L_over_ell": COIL_LOOPS,
@@ -250,7 +262,7 @@ def draw(rec: Record) -> dict:
     _replicas_loglog(c, xl, d["loops"], d["loops_pf"])
     c.loglog(xl, COIL_LOOPS * xl, "b--", label="coil turns 2^1/4 L/(2πℓ)")
     c.loglog(xl, _positive(nan_quiet(np.nanmean, d["turns"], axis=0)), "bx", ms=5,
-             label="turns |Σθ|/2π")  # fmt: skip
+             label="turns Σ|θ|/2π")  # fmt: skip
     beta = d["beta"]
     if beta.fit_range is not None and np.isfinite(beta.value):
         lo, hi = beta.fit_range
