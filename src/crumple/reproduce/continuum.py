@@ -12,9 +12,9 @@ writes a report with three sections:
   against the paper's closed form, with rest-angle disorder replicas and the perfect wire.
 
 Profiles: ``smoke`` (the test suite, seconds), ``quick`` (at most 10 minutes on 2 cores, with
-N ≤ 400, Λ ≤ 10⁶) and ``full`` (issue 12's sizes: Λ up to 10¹⁰, N up to 10⁴; not run: at
-d = 10⁻⁵ L0 the engine's contact stages above Λ ≈ 4·10⁴ do not converge within 5000 Newton
-iterations, docs/performance.md, "Strong confinement"). The hard-core width
+N ≤ 400, Λ ≤ 10⁶) and ``full`` (sized to about 2 hours on 2 cores from the measured cost of
+the contact stages: N ≤ 1000, the sweep to Λ = 10¹⁰; run once, 2 h 08 min, docs/continuum.md,
+"The full profile"). The hard-core width
 is the model's default d = 1e-5 L0 in every profile (d/L is a dimensionless number of its own,
 held fixed so that it does not break the collapse).
 """
@@ -52,7 +52,7 @@ class ContinuumProfile:
     the collapse and the discretisation error. ``fig5_n`` and ``fig5_lambdas``: the paper's six
     (k_b, k_s) ramped in λ at N = fig5_n. ``sweep_n``, ``sweep_confinements``: the Λ sweep,
     ``replicas`` disorder replicas (rest-angle s.d. :data:`REST_ANGLE_SD`) plus the perfect
-    wire. ``ran``: whether this profile has been run (the full profile has not).
+    wire.
     """
 
     name: str
