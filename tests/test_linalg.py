@@ -317,3 +317,33 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
     sums = np.bincount(col, weights=np.abs(a.data) * np.abs(v)[a.indices], minlength=n)
     assert raw.abs_row_max(np.abs(v)) == float(np.max(sums))
     assert raw.tocsc() is raw.tocsc() and raw.nnz == a.nnz
+
+
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 300), extra=st.floats(0.0, 0.5),
+       cut=st.booleans())  # fmt: skip
+def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut):
+    """The compiled RCM gives SciPy's permutation exactly (so the iterates do not change) on
+    chain bands with random contacts, disconnected nodes and missing diagonal entries."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    from crumple.linalg import _rcm
+
+    rng = np.random.default_rng(seed)
+    band = min(5, n - 1)
+    a = sp.diags([np.ones(n - abs(k)) for k in range(-band, band + 1)],
+                 list(range(-band, band + 1))).tolil()  # fmt: skip
+    for _ in range(int(extra * n)):
+        i, j = rng.integers(0, n, 2)
+        a[i, j] = a[j, i] = 1.0
+    if cut:
+        k = int(rng.integers(0, n))
+        a[k, :] = 0.0
+        a[:, k] = 0.0
+        a[k, k] = float(rng.random() < 0.5)
+    a = a.tocsc()
+    a.eliminate_zeros()
+    a.sort_indices()
+    expected = reverse_cuthill_mckee(a.tocsr(), symmetric_mode=True)
+    np.testing.assert_array_equal(_rcm(a), expected)
+    np.testing.assert_array_equal(_rcm(CSC(a.data, a.indices, a.indptr)), expected)
