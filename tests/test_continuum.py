@@ -174,7 +174,7 @@ def test_turns_of_known_shapes():
     assert np.isnan(turns(np.full((5, 2), np.nan)))
 
 
-def test_study_smoke_report_is_complete(tmp_path):
+def test_study_smoke_report_is_complete(tmp_path, capsys):
     out = tmp_path / "cont"
     rc = main(["study", "continuum", "--profile", "smoke", "--out", str(out), "--workers", "2",
                "--quiet"])  # fmt: skip
@@ -198,3 +198,11 @@ def test_study_smoke_report_is_complete(tmp_path):
     assert "energy_over_coil" in part and "loops_beta" in part and "turns" in part
     # a store of one profile is not reused for another
     assert main(["study", "continuum", "--quick", "--out", str(out), "--quiet"]) == 2
+    # a store whose sweep has no finished run yet (a copy taken mid-run): one clear line
+    for run in (out / "data" / "continuum_sweep" / "runs").glob("*.h5"):
+        run.unlink()
+    capsys.readouterr()
+    assert main(["study", "continuum", "--profile", "smoke", "--out", str(out), "--report-only",
+                 "--quiet"]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "no finished 'continuum_sweep' run yet" in err and "crumple status" in err, err

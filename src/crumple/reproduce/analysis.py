@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..paper import Profile
 from . import registry
 from .common import Context, Record, _jsonable
@@ -132,6 +134,11 @@ def analyse(
                 f"`{command(study)} --out {out}` with its profile to add them"
             )
         series[e.name] = _series(store, e.levels)
+        if not np.asarray(series[e.name].done).any():  # nothing to measure: say so, not NaN
+            raise ValueError(
+                f"{out} holds no finished {e.name!r} run yet (`crumple status {store}`); let "
+                f"`{command(study)} --out {out}` finish it, then redraw the report"
+            )
     records: dict[str, Record] = {}
     for i, s in enumerate(secs, 1):
         if log:
