@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .energy_kernels import _bend_law, _contact_triplets, _wall_triplets
+from .energy_kernels import _contact_triplets, _joint, _wall_triplets
 
 
 @njit(cache=True)
@@ -42,16 +42,9 @@ def _phi_hessian_times(vx, vy, dx, dy):
 def _bending_action(pos, k_b, s, theta_p, rest, v, out):
     """Σ_i [f'' ∇θ_i δθ_i + f' ∇²θ_i v] into out (n_nodes, 2); ∇²θ = -Hφ(a) on a, +Hφ(b) on b."""
     for i in range(1, pos.shape[0] - 1):
-        ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
-        bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
+        ax, ay, bx, by, df, d2f, gax, gay, gbx, gby = _joint(pos, i, k_b, s, theta_p, rest)
         dax, day = v[i, 0] - v[i - 1, 0], v[i, 1] - v[i - 1, 1]
         dbx, dby = v[i + 1, 0] - v[i, 0], v[i + 1, 1] - v[i, 1]
-        la2 = ax * ax + ay * ay
-        lb2 = bx * bx + by * by
-        theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-        _, df, d2f = _bend_law(theta - rest[i - 1], k_b, s, theta_p)
-        gax, gay = ay / la2, -ax / la2  # dθ/da
-        gbx, gby = -by / lb2, bx / lb2  # dθ/db
         dtheta = (gax * dax + gay * day) + (gbx * dbx + gby * dby)
         hax, hay = _phi_hessian_times(ax, ay, dax, day)
         hbx, hby = _phi_hessian_times(bx, by, dbx, dby)

@@ -262,6 +262,19 @@ def _project_psd(block):
 
 
 @njit(cache=True)
+def _joint(pos, i, k_b, s, theta_p, rest):
+    """Joint i's segment vectors a = x_i - x_{i-1}, b = x_{i+1} - x_i, the bending law's f'
+    and f'' at its angle, and dθ/da, dθ/db: (ax, ay, bx, by, f', f'', ∂θ/∂a, ∂θ/∂b)."""
+    ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
+    bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
+    la2 = ax * ax + ay * ay
+    lb2 = bx * bx + by * by
+    theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+    _, df, d2f = _bend_law(theta - rest[i - 1], k_b, s, theta_p)
+    return ax, ay, bx, by, df, d2f, ay / la2, -ax / la2, -by / lb2, bx / lb2
+
+
+@njit(cache=True)
 def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
                       project, project_bending=False, radius=math.inf):  # fmt: skip
     """The exact Hessian's triplets, term by term in a fixed order (bending, stretching,
@@ -291,14 +304,7 @@ def _bending_triplets(pos, k_b, s, theta_p, rest, project_bending, rows, cols, v
     ha = np.empty((2, 2))
     hb = np.empty((2, 2))
     for i in range(1, pos.shape[0] - 1):
-        ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
-        bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
-        la2 = ax * ax + ay * ay
-        lb2 = bx * bx + by * by
-        theta = math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-        _, df, d2f = _bend_law(theta - rest[i - 1], k_b, s, theta_p)
-        gax, gay = ay / la2, -ax / la2
-        gbx, gby = -by / lb2, bx / lb2
+        ax, ay, bx, by, df, d2f, gax, gay, gbx, gby = _joint(pos, i, k_b, s, theta_p, rest)
         g[0], g[1] = -gax, -gay
         g[2], g[3] = gax - gbx, gay - gby
         g[4], g[5] = gbx, gby
