@@ -8,6 +8,7 @@
     python benchmarks/bench_scale.py compare         # stage energies, new vs landed
     python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
     python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
+    python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -275,6 +276,39 @@ def _gauge_overlap():
         )
 
 
+def bench_accurate(ns=(), modes=("off", "on")):
+    """The default ramp of the continuum wire with the element-form stability test
+    (``relax.ACCURATE_STABILITY``) off and on: per stage, iterations, whether the stage is at
+    equilibrium, and whether the accurate product decided its stability."""
+    from crumple import relax
+
+    print("== default schedule, continuum B = 0.05, S = 5000, seed 0: ACCURATE_STABILITY ==")
+    for n in ns or (2000,):
+        wire = continuum_wire(n)
+        for mode in modes:
+            relax.ACCURATE_STABILITY = mode == "on"
+            t0 = time.process_time()
+
+            def line(i, total, st, t0=t0, n=n, mode=mode):
+                res = st.result
+                print(f"  N = {n} {mode} stage {i:2d} λ = {st.lam:8.4g}: {res.iterations:5d} "
+                      f"its, converged {res.converged}, accurate "
+                      f"{'accurate' in res.message}, E = {st.energy.total:.10g}, "
+                      f"{time.process_time() - t0:7.1f} s", flush=True)  # fmt: skip
+                if not res.converged:
+                    print(f"    {res.message}", flush=True)
+
+            r = run_ramp(wire, seed=0, progress=line)
+            its = sum(s.result.iterations for s in r.stages)
+            acc = sum("accurate" in s.result.message for s in r.stages)
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+            print(f"  N = {n} {mode}: {time.process_time() - t0:.1f} s CPU, {its} iterations, "
+                  f"{sum(s.result.converged for s in r.stages)}/{len(r.stages)} converged, "
+                  f"{acc} stages decided by the accurate product, max RSS {rss:.2f} GiB",
+                  flush=True)  # fmt: skip
+    relax.ACCURATE_STABILITY = False
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -293,5 +327,7 @@ if __name__ == "__main__":
         bench_contacts([int(v) for v in sys.argv[2:]])
     elif what == "gauge":
         bench_gauge([int(v) for v in sys.argv[2:]])
+    elif what == "accurate":
+        bench_accurate([int(v) for v in sys.argv[2:]])
     else:
         raise SystemExit(__doc__)

@@ -614,9 +614,10 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
 
 
 def test_accurate_stability_is_unused_where_the_assembled_hessian_resolves_tau(monkeypatch):
-    """relax.ACCURATE_STABILITY passes the element-form product to Newton; at N = 100 the
-    assembled Hessian resolves τ, so the product is never called and the result is the same
-    bit for bit, at an equilibrium and through a buckling stage (an escape)."""
+    """relax.ACCURATE_STABILITY (on by default) passes the element-form product to Newton; at
+    N = 100 the assembled Hessian resolves τ, so the product is never called and the result is
+    the same bit for bit with the switch off, at an equilibrium and through a buckling stage
+    (an escape)."""
     wire = Wire(k_b=5, k_s=5e5)
     calls = []
     original = WireEnergy.hessian_action
@@ -628,6 +629,7 @@ def test_accurate_stability_is_unused_where_the_assembled_hessian_resolves_tau(m
     monkeypatch.setattr(WireEnergy, "hessian_action", counted)
     rng = np.random.default_rng(2)
     x0 = np.column_stack([np.linspace(-0.5, 0.5, 101), 1e-4 * rng.standard_normal(101)])
+    monkeypatch.setattr(relax, "ACCURATE_STABILITY", False)
     off = [minimize_wire(wire, x0, lam) for lam in (2.0, 60.0)]
     monkeypatch.setattr(relax, "ACCURATE_STABILITY", True)
     on = [minimize_wire(wire, x0, lam) for lam in (2.0, 60.0)]

@@ -28,14 +28,15 @@ __all__ = ["POWELL_RTOL", "STABILITY_TOL", "minimize_wire", "node_lengths"]
 #: straight wire just above its Euler load has -4 to -27 (N = 10⁴, λ = 7 to 12.6). τ is far
 #: below both and far above round-off (docs/model.md, "Minimisation to equilibrium").
 STABILITY_TOL = 1e-3
-#: Opt-in: decide stability with the element-form Hessian product
+#: Decide stability with the element-form Hessian product
 #: (:meth:`crumple.energy.WireEnergy.hessian_action`) where the assembled Hessian's float64
-#: resolution exceeds τ (``minimize_accurate``). Off by default: it fixes the straight wire's
-#: stages at N = 10⁵ (stages 0–9 of the default ramp converged and stable, where every one
-#: stopped before), but it is reachable from N ≈ 1200 for the continuum wire (and at N = 1000
-#: with the continuum study's stiff k_s), where its effect on whole ramps has not been measured
-#: (docs/performance.md, "Stability where float64 cannot assemble it").
-ACCURATE_STABILITY = False
+#: resolution exceeds τ and its inertia count found negative curvature (``minimize_accurate``).
+#: On: it fixes the straight wire's stages at N = 10⁵ (stages 0–9 of the default ramp converged
+#: and stable, where every one stopped before), and on every whole ramp measured with it (N =
+#: 2000 and 10⁴ default ramps, the continuum study's stiff N = 1000 wire to Λ = 10⁶, its quick
+#: profile) it was never asked and the iterates are those without it (docs/performance.md,
+#: "Stability where float64 cannot assemble it"). False: the count alone decides.
+ACCURATE_STABILITY = True
 
 Method = Literal["newton", "powell"]
 
