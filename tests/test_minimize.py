@@ -810,3 +810,104 @@ def test_the_opt_in_recheck_of_a_positive_count_finds_the_curvature_it_missed(mo
     assert both.converged, both.message
     assert "stable by the accurate Hessian product" in both.message
     np.testing.assert_allclose(np.abs(both.x), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
+
+
+def _too_short_step(a):
+    """A quadratic bowl 0.5 |x - a|² at x = 0 and a step of a twentieth of the way to its
+    minimum (what a model twenty times too stiff gives), accepted in full: the state after it."""
+    from crumple.minimize import _State
+
+    def fun(x):
+        return 0.5 * float((x - a) @ (x - a)), x - a
+
+    x0 = np.zeros_like(a)
+    e0, g0 = fun(x0)
+    p = 0.05 * a
+    st = _State(x=x0, e=e0, g=g0, fmax=float(np.max(np.abs(g0))))
+    et, gt = fun(p)
+    return st, fun, p, (1.0, p, et, gt, float(np.max(np.abs(gt))))
+
+
+def test_a_too_short_fallback_step_is_lengthened_to_the_minimum_along_it(monkeypatch):
+    """Two secant trials reach the bowl's minimum from a twentieth of the way (8× capped, then
+    the exact root); each trial is one evaluation; the energy falls at each."""
+    import crumple.minimize as mz
+    from crumple.minimize import _expand
+
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+
+    a = np.array([3.0, -4.0])
+    st, fun, p, accepted = _too_short_step(a)
+    alpha, x, e, _, _ = _expand(st, fun, p, None, None, 1e-4, float(st.g @ p), 0.25, None,
+                                *accepted)  # fmt: skip
+    assert alpha == pytest.approx(20.0)
+    np.testing.assert_allclose(x, a, atol=1e-12)
+    assert e < accepted[2] and e == pytest.approx(0.0, abs=1e-20)
+    assert st.nfev == 1 + 2  # two trials: 8×, then the root (the third finds a zero slope)
+
+
+@pytest.mark.parametrize("block", ["step_limit", "feasible", "max_step"])
+def test_a_fallback_step_is_not_lengthened_past_a_contact_a_crossing_or_the_cap(block, monkeypatch):
+    """An unsafe (collision detection short of the whole step), infeasible or over-long trial
+    ends the lengthening: the accepted step is kept as it was."""
+    import crumple.minimize as mz
+    from crumple.minimize import _expand
+
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+
+    a = np.array([3.0, -4.0])
+    st, fun, p, accepted = _too_short_step(a)
+    limit = (lambda x, q: 0.5) if block == "step_limit" else None
+    feasible = (lambda x: False) if block == "feasible" else None
+    cap = 0.3 if block == "max_step" else None  # the first trial would move 8 × 0.25 = 2
+    out = _expand(st, fun, p, limit, feasible, 1e-4, float(st.g @ p), 0.25, cap, *accepted)
+    assert out[0] == 1.0 and out[1] is p and out[2] == accepted[2]
+
+
+def test_a_lengthened_step_that_raises_the_largest_force_is_refused(monkeypatch):
+    """E = -x + 5 max(0, x - 1/2)² from x = 0, a step to 0.1 accepted: the slope is the same
+    there (no curvature seen), so the trial goes 8× further, to 0.8, lower in energy (-0.35
+    against -0.1) but pressed into the wall (force 2 against 1). Refused (it is where the
+    per-node wires' lengthened steps stalled); accepted without the guard."""
+    import crumple.minimize as mz
+    from crumple.minimize import _expand, _State
+
+    def fun(x):
+        over = max(0.0, float(x[0]) - 0.5)
+        return -float(x[0]) + 5.0 * over**2, np.array([-1.0 + 10.0 * over])
+
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+    x0, p = np.zeros(1), np.array([0.1])
+    e0, g0 = fun(x0)
+    et, gt = fun(p)
+    accepted = (1.0, p, et, gt, 1.0)
+
+    def lengthen():
+        st = _State(x=x0, e=e0, g=g0, fmax=1.0)
+        return _expand(st, fun, p, None, None, 1e-4, float(g0 @ p), 0.1, None, *accepted)
+
+    assert lengthen()[0] == 1.0
+    monkeypatch.setattr(mz, "EXPAND_FORCE_GUARD", False)
+    alpha, _, e, _, f = lengthen()
+    assert alpha == 8.0 and e == pytest.approx(-0.35) and f == pytest.approx(2.0)
+
+
+def test_lengthened_steps_keep_a_ramp_at_true_equilibria(monkeypatch):
+    """With the opt-in lengthening on, a contact ramp (N = 100, λ to 2000) still ends every
+    stage converged and stable, never crosses, and its iterates differ from the default's (the
+    switch is live); off is the default."""
+    import crumple.minimize as mz
+    from crumple.geometry import has_crossings
+    from crumple.model import Wire
+    from crumple.protocol import Ramp, run_ramp
+
+    assert mz.EXPANSIONS == 0
+    wire, ramp = Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 10.0, 100.0, 300.0, 1000.0, 2000.0))
+    off = run_ramp(wire, ramp, seed=4)
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+    on = run_ramp(wire, ramp, seed=4)
+    assert on.converged and off.converged
+    assert not any(has_crossings(s.positions) for s in on.stages)
+    assert on.stages[-1].energy.hard_core > 0
+    assert any(a.result.evaluations != b.result.evaluations
+               for a, b in zip(on.stages, off.stages, strict=True))  # fmt: skip
