@@ -278,3 +278,20 @@ def test_smoke_results_match_the_golden_file(smoke):
     want = json.loads(GOLDEN.read_text())
     for key in sorted(set(want) | set(got)):
         assert got.get(key) == want.get(key), f"results.json[{key!r}] differs from {GOLDEN.name}"
+
+
+def test_a_paper_report_is_measured_while_an_experiment_has_no_finished_run(smoke, tmp_path):
+    """The paper's report can be drawn from an interrupted store: an experiment with no
+    finished run leaves its rows "not measured" (only the continuum study, whose fits need
+    every series, stops instead: tests/test_continuum.py)."""
+    import shutil
+
+    from crumple.reproduce.analysis import analyse
+
+    out = tmp_path / "partial"
+    shutil.copytree(smoke[0], out)
+    for run_file in (out / "data" / "disorder" / "runs").glob("*.h5"):
+        run_file.unlink()
+    an = analyse(out)
+    assert not np.asarray(an.series["disorder"].done).any()
+    assert set(an.records) >= {"fig3_mass_size", "fig5_radius"}

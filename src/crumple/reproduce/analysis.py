@@ -134,7 +134,7 @@ def analyse(
                 f"`{command(study)} --out {out}` with its profile to add them"
             )
         series[e.name] = _series(store, e.levels)
-        if not np.asarray(series[e.name].done).any():  # nothing to measure: say so, not NaN
+        if not (study is None or study.partial or np.asarray(series[e.name].done).any()):
             raise ValueError(
                 f"{out} holds no finished {e.name!r} run yet (`crumple status {store}`); let "
                 f"`{command(study)} --out {out}` finish it, then redraw the report"

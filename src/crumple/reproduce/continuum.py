@@ -217,4 +217,5 @@ CONTINUUM = Study(
     sections=sections,
     profiles=PROFILES,
     profile_fields=tuple(ContinuumProfile.__dataclass_fields__),
+    partial=False,  # every section fits along a series: an empty one has no λ axis
 )

@@ -40,6 +40,10 @@ class Study:
     #: Main table: None, the paper's numbers (paper against ours, both readings of Eq. 1);
     #: (heading, label a, label b), a comparison of two measurements of this study.
     comparison: tuple[str, str, str] | None = None
+    #: Whether a report can be drawn while one of its experiments has no finished run (its
+    #: sections then say "not measured", as the paper's do); False: :func:`.analysis.analyse`
+    #: stops with one line naming the experiment (the continuum study's fits need every one).
+    partial: bool = True
 
     def text(self) -> dict:
         """The keyword texts of :func:`.document.blocks`."""
