@@ -283,7 +283,15 @@ def bench_accurate(ns=(), modes=("off", "on")):
     from crumple import relax
 
     print("== default schedule, continuum B = 0.05, S = 5000, seed 0: ACCURATE_STABILITY ==")
-    for n in ns or (2000,):
+    default = relax.ACCURATE_STABILITY
+    try:
+        _accurate_ramps(ns or (2000,), modes, relax)
+    finally:
+        relax.ACCURATE_STABILITY = default
+
+
+def _accurate_ramps(ns, modes, relax):
+    for n in ns:
         wire = continuum_wire(n)
         for mode in modes:
             relax.ACCURATE_STABILITY = mode == "on"
@@ -306,7 +314,6 @@ def bench_accurate(ns=(), modes=("off", "on")):
                   f"{sum(s.result.converged for s in r.stages)}/{len(r.stages)} converged, "
                   f"{acc} stages decided by the accurate product, max RSS {rss:.2f} GiB",
                   flush=True)  # fmt: skip
-    relax.ACCURATE_STABILITY = False
 
 
 if __name__ == "__main__":

@@ -321,10 +321,11 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
 
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 300), extra=st.floats(0.0, 0.5),
-       cut=st.booleans())  # fmt: skip
-def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut):
+       cut=st.booleans(), blocks=st.integers(1, 4))  # fmt: skip
+def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut, blocks):
     """The compiled RCM gives SciPy's permutation exactly (so the iterates do not change) on
-    chain bands with random contacts, disconnected nodes and missing diagonal entries."""
+    chain bands with random contacts, several components, isolated nodes and missing diagonal
+    entries."""
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
     from crumple.linalg import _rcm
@@ -336,11 +337,18 @@ def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut):
     for _ in range(int(extra * n)):
         i, j = rng.integers(0, n, 2)
         a[i, j] = a[j, i] = 1.0
+    for b in range(1, blocks):  # split the chain into components
+        k = b * n // blocks
+        if 0 < k < n:
+            a[:k, k:] = 0.0
+            a[k:, :k] = 0.0
     if cut:
         k = int(rng.integers(0, n))
         a[k, :] = 0.0
         a[:, k] = 0.0
         a[k, k] = float(rng.random() < 0.5)
+        j = int(rng.integers(0, n))  # a connected node without its diagonal entry
+        a[j, j] = 0.0
     a = a.tocsc()
     a.eliminate_zeros()
     a.sort_indices()

@@ -838,8 +838,8 @@ def test_a_too_short_fallback_step_is_lengthened_to_the_minimum_along_it(monkeyp
 
     a = np.array([3.0, -4.0])
     st, fun, p, accepted = _too_short_step(a)
-    alpha, x, e, _, _ = _expand(st, fun, p, None, None, 1e-4, float(st.g @ p), 0.25, None,
-                                *accepted)  # fmt: skip
+    alpha, x, e, _, _ = _expand(st, fun, p, None, None, 1e-4, float(st.g @ p), max_force(p),
+                                None, *accepted)  # fmt: skip
     assert alpha == pytest.approx(20.0)
     np.testing.assert_allclose(x, a, atol=1e-12)
     assert e < accepted[2] and e == pytest.approx(0.0, abs=1e-20)
@@ -859,9 +859,43 @@ def test_a_fallback_step_is_not_lengthened_past_a_contact_a_crossing_or_the_cap(
     st, fun, p, accepted = _too_short_step(a)
     limit = (lambda x, q: 0.5) if block == "step_limit" else None
     feasible = (lambda x: False) if block == "feasible" else None
-    cap = 0.3 if block == "max_step" else None  # the first trial would move 8 × 0.25 = 2
-    out = _expand(st, fun, p, limit, feasible, 1e-4, float(st.g @ p), 0.25, cap, *accepted)
+    cap = 0.22 if block == "max_step" else None  # the step moves 0.2: no room for a trial
+    out = _expand(st, fun, p, limit, feasible, 1e-4, float(st.g @ p), max_force(p), cap,
+                  *accepted)  # fmt: skip
     assert out[0] == 1.0 and out[1] is p and out[2] == accepted[2]
+    assert st.nfev == (2 if block == "feasible" else 1)  # the infeasible trial was evaluated
+
+
+def test_a_lengthened_step_stops_at_the_cap(monkeypatch):
+    """The trial towards the bowl's minimum (20× the step) is clipped to max_step (2×)."""
+    import crumple.minimize as mz
+    from crumple.minimize import _expand
+
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+    st, fun, p, accepted = _too_short_step(np.array([3.0, -4.0]))
+    out = _expand(st, fun, p, None, None, 1e-4, float(st.g @ p), max_force(p), 0.4, *accepted)
+    assert out[0] == 2.0 and out[2] < accepted[2] and st.nfev == 2
+
+
+def test_exact_newton_steps_are_never_lengthened(monkeypatch):
+    """On a convex problem every step is the exact Hessian's: the lengthening, switched on,
+    evaluates nothing more (the same iterates and counts)."""
+    import crumple.minimize as mz
+
+    x0 = np.array([-1.2, 1.0, -0.5, 0.8])
+    a = np.diag([1.0, 10.0, 100.0, 1000.0])
+
+    def fun(x):
+        return 0.25 * float(x @ x) ** 2 + 0.5 * float(x @ a @ x), (x @ x) * x + a @ x
+
+    def hess(x):
+        return 2.0 * np.outer(x, x) + float(x @ x) * np.eye(4) + a
+
+    off = newton(fun, x0, hess=hess)
+    monkeypatch.setattr(mz, "EXPANSIONS", 3)
+    on = newton(fun, x0, hess=hess)
+    assert off.converged and on.converged
+    assert on.evaluations == off.evaluations and np.array_equal(on.x, off.x)
 
 
 def test_a_lengthened_step_that_raises_the_largest_force_is_refused(monkeypatch):

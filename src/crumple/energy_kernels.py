@@ -264,7 +264,9 @@ def _project_psd(block):
 @njit(cache=True)
 def _joint(pos, i, k_b, s, theta_p, rest):
     """Joint i's segment vectors a = x_i - x_{i-1}, b = x_{i+1} - x_i, the bending law's f'
-    and f'' at its angle, and dθ/da, dθ/db: (ax, ay, bx, by, f', f'', ∂θ/∂a, ∂θ/∂b)."""
+    and f'' at its angle, and dθ/da, dθ/db: (ax, ay, bx, by, f', f'', ∂θ/∂a, ∂θ/∂b). Called by
+    cached kernels here and in :mod:`crumple.energy_action`: Numba's cache does not see a
+    change to a callee, so after editing this function clear ``__pycache__``."""
     ax, ay = pos[i, 0] - pos[i - 1, 0], pos[i, 1] - pos[i - 1, 1]
     bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
     la2 = ax * ax + ay * ay

@@ -299,7 +299,10 @@ def _rcm(a) -> np.ndarray:
     indptr = np.asarray(a.indptr, dtype=np.int64)
     indices = np.asarray(a.indices, dtype=np.int64)
     degree = _degrees(n, indptr, indices)
-    return _rcm_kernel(n, indptr, indices, degree, np.argsort(degree))
+    # argsort in SciPy's index dtype: NumPy's (SIMD) sorts need not break ties alike for int32
+    # and int64
+    by_degree = np.argsort(degree.astype(np.int32) if n < 2**31 else degree)
+    return _rcm_kernel(n, indptr, indices, degree, by_degree)
 
 
 @njit(cache=True)

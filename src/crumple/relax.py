@@ -34,8 +34,9 @@ STABILITY_TOL = 1e-3
 #: On: it fixes the straight wire's stages at N = 10⁵ (stages 0–9 of the default ramp converged
 #: and stable, where every one stopped before), and on every whole ramp measured with it (N =
 #: 2000 and 10⁴ default ramps, the continuum study's stiff N = 1000 wire to Λ = 10⁶, its quick
-#: profile) it was never asked and the iterates are those without it (docs/performance.md,
-#: "Stability where float64 cannot assemble it"). False: the count alone decides.
+#: profile) it never overruled the count and the iterates are those without it
+#: (docs/performance.md, "Stability where float64 cannot assemble it"). False: the count alone
+#: decides.
 ACCURATE_STABILITY = True
 
 Method = Literal["newton", "powell"]
@@ -161,7 +162,7 @@ def minimize_wire(
             fixed=fixed,
             barriers=energy.barriers if anticipate_contacts else None,
             # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
-            # element-form product (crumple.energy_action), opt-in (ACCURATE_STABILITY)
+            # element-form product (crumple.energy_action); on unless ACCURATE_STABILITY is off
             hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
         )
     if method == "powell":
