@@ -831,8 +831,8 @@ def _too_short_step(a):
 def test_a_too_short_fallback_step_is_lengthened_to_the_minimum_along_it(monkeypatch):
     """Two secant trials reach the bowl's minimum from a twentieth of the way (8× capped, then
     the exact root); each trial is one evaluation; the energy falls at each."""
-    import crumple.minimize as mz
-    from crumple.minimize import _expand
+    import crumple.minimize_expand as mz
+    from crumple.minimize_expand import _expand
 
     monkeypatch.setattr(mz, "EXPANSIONS", 3)
 
@@ -850,8 +850,8 @@ def test_a_too_short_fallback_step_is_lengthened_to_the_minimum_along_it(monkeyp
 def test_a_fallback_step_is_not_lengthened_past_a_contact_a_crossing_or_the_cap(block, monkeypatch):
     """An unsafe (collision detection short of the whole step), infeasible or over-long trial
     ends the lengthening: the accepted step is kept as it was."""
-    import crumple.minimize as mz
-    from crumple.minimize import _expand
+    import crumple.minimize_expand as mz
+    from crumple.minimize_expand import _expand
 
     monkeypatch.setattr(mz, "EXPANSIONS", 3)
 
@@ -868,8 +868,8 @@ def test_a_fallback_step_is_not_lengthened_past_a_contact_a_crossing_or_the_cap(
 
 def test_a_lengthened_step_stops_at_the_cap(monkeypatch):
     """The trial towards the bowl's minimum (20× the step) is clipped to max_step (2×)."""
-    import crumple.minimize as mz
-    from crumple.minimize import _expand
+    import crumple.minimize_expand as mz
+    from crumple.minimize_expand import _expand
 
     monkeypatch.setattr(mz, "EXPANSIONS", 3)
     st, fun, p, accepted = _too_short_step(np.array([3.0, -4.0]))
@@ -880,7 +880,7 @@ def test_a_lengthened_step_stops_at_the_cap(monkeypatch):
 def test_exact_newton_steps_are_never_lengthened(monkeypatch):
     """On a convex problem every step is the exact Hessian's: the lengthening, switched on,
     evaluates nothing more (the same iterates and counts)."""
-    import crumple.minimize as mz
+    import crumple.minimize_expand as mz
 
     x0 = np.array([-1.2, 1.0, -0.5, 0.8])
     a = np.diag([1.0, 10.0, 100.0, 1000.0])
@@ -903,8 +903,9 @@ def test_a_lengthened_step_that_raises_the_largest_force_is_refused(monkeypatch)
     there (no curvature seen), so the trial goes 8× further, to 0.8, lower in energy (-0.35
     against -0.1) but pressed into the wall (force 2 against 1). Refused (it is where the
     per-node wires' lengthened steps stalled); accepted without the guard."""
-    import crumple.minimize as mz
-    from crumple.minimize import _expand, _State
+    import crumple.minimize_expand as mz
+    from crumple.minimize import _State
+    from crumple.minimize_expand import _expand
 
     def fun(x):
         over = max(0.0, float(x[0]) - 0.5)
@@ -930,7 +931,7 @@ def test_lengthened_steps_keep_a_ramp_at_true_equilibria(monkeypatch):
     """With the opt-in lengthening on, a contact ramp (N = 100, λ to 2000) still ends every
     stage converged and stable, never crosses, and its iterates differ from the default's (the
     switch is live); off is the default."""
-    import crumple.minimize as mz
+    import crumple.minimize_expand as mz
     from crumple.geometry import has_crossings
     from crumple.model import Wire
     from crumple.protocol import Ramp, run_ramp
