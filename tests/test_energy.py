@@ -1049,3 +1049,29 @@ def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
     assert np.array_equal(
         _scatter_add(where, vals, len(keys)), np.bincount(where, vals, minlength=len(keys))
     )
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), project=st.booleans(), cavity=st.booleans())
+def test_hessian_assembled_into_its_pattern_is_its_triplets_scattered_bit_for_bit(
+    seed, project, cavity
+):
+    """``hessian_csc`` once its pattern is known writes the terms straight into the CSC data
+    (``_hessian_values``): the same sums, in the same order, as scattering the triplets, for
+    pairs in and out of the core, plastic joints, either projection and the cavity's wall."""
+    from crumple.energy_assembly import _scatter_add
+
+    rng = np.random.default_rng(seed)
+    m, seg, d = 6, 0.08, 0.01
+    pos = staggered_hairpin(m, seg, 0.5 * d) + 1e-4 * rng.standard_normal((2 * m + 1, 2))
+    w = Wire(k_b=2.0, k_s=1e3, n_segments=2 * m, hard_core=d, hard_core_energy=1e-3,
+             plasticity=Plasticity(s=0.3, theta_p=0.2),
+             cavity_radius=2.0 if cavity else None)  # fmt: skip
+    energy = WireEnergy(w, lam=3.0, rest_angles=0.1 * rng.standard_normal(2 * m - 1))
+    first = energy.hessian_csc(pos, project_contacts=project, project_bending=project)
+    again = energy.hessian_csc(pos, project_contacts=project, project_bending=project)
+    assert again.indices is first.indices  # the pattern kept: the second one went direct
+    _, _, vals = energy._triplets(pos, project, project)
+    where = energy._pattern[4]
+    assert np.array_equal(again.data, _scatter_add(where, vals, first.indices.shape[0]))
+    assert np.array_equal(again.data, first.data)

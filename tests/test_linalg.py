@@ -73,6 +73,34 @@ def test_negative_direction_has_negative_curvature():
     assert v @ (a @ v) < 0
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 50), shift=st.floats(-2.0, 2.0))
+def test_a_trial_factorisation_decides_as_the_full_one_and_stops_at_its_first_bad_pivot(
+    seed, n, shift
+):
+    """``trial=True`` stops at the first pivot below the floor: the same verdict, the same first
+    modified pivot and, from it, the same negative direction to the bit as the full modified
+    factorisation; a passing trial is the full factor; a stopped one refuses to solve."""
+    rng = np.random.default_rng(seed)
+    a = random_symmetric(rng, n, 0.3, shift)
+    floor = np.full(n, 1e-6)
+    full = LDLT().factorize(a, floor=floor)
+    trial = LDLT().factorize(a, floor=floor, trial=True)
+    assert (trial.modified == 0) == (full.modified == 0)
+    if full.modified == 0:
+        assert trial.complete
+        b = rng.standard_normal(n)
+        assert np.array_equal(trial.solve(b), full.solve(b))
+        return
+    assert trial.modified == 1 and not trial.complete
+    assert trial.first_modified == full.first_modified
+    assert np.array_equal(trial.negative_direction(), full.negative_direction())
+    with pytest.raises(ValueError, match="cannot solve"):
+        trial.solve(np.ones(n))
+    with pytest.raises(ValueError, match="needs a floor"):
+        LDLT().factorize(a, trial=True)
+
+
 def test_symbolic_analysis_is_reused_while_the_pattern_holds():
     rng = np.random.default_rng(7)
     a = random_symmetric(rng, 50, 0.1, 10.0)

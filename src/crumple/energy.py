@@ -46,6 +46,7 @@ from .energy_kernels import (
     _elastic_eg,
     _hard_core_eg,
     _hessian_triplets,
+    _hessian_values,
     _line_admissible,
     _line_energy,
     _line_prepare,
@@ -445,10 +446,18 @@ class WireEnergy:
         arrays, without building a SciPy matrix (the Newton minimiser's hot path; ``x`` is
         trusted to be a float array of shape (n_nodes, 2))."""
         x = np.ascontiguousarray(x, dtype=np.float64)
+        ks, js = self._pairs(x)
+        if self._pattern is not None and self._pattern[0] is ks:  # straight into the pattern
+            _, _, indptr, indices, where = self._pattern
+            w = self.wire
+            data = _hessian_values(
+                where, indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s,
+                w.rest_length, self.lam, self.weights, ks, js, w.hard_core, w.hard_core_energy,
+                project_contacts, project_bending, self._radius,
+            )  # fmt: skip
+            return CSC(data, indices, indptr)
         rows, cols, vals = self._triplets(x, project_contacts, project_bending)
-        ks = self._ks
-        if self._pattern is None or self._pattern[0] is not ks:
-            self._pattern = self._new_pattern(ks, self._js, rows, cols, x.size)
+        self._pattern = self._new_pattern(ks, js, rows, cols, x.size)
         _, _, indptr, indices, where = self._pattern
         return CSC(_scatter_add(where, vals, indices.shape[0]), indices, indptr)
 

@@ -226,8 +226,18 @@ def _line_admissible(y, params):
 
 @njit(cache=True)
 def _put_block(rows, cols, vals, m, nodes, block):
-    """Scatter a (2p, 2p) block over nodes (p,) into the triplet arrays from index m."""
+    """Scatter a (2p, 2p) block over nodes (p,) from triplet index m: into the triplet arrays,
+    or, in assembly mode (``cols`` empty), added straight into the CSC data ``vals`` at the
+    entries ``rows[m]`` (the pattern's ``where``) names, in the same order."""
     p = nodes.shape[0]
+    if cols.shape[0] == 0:
+        for a in range(p):
+            for b in range(p):
+                for u in range(2):
+                    for v in range(2):
+                        vals[rows[m]] += block[2 * a + u, 2 * b + v]
+                        m += 1
+        return m
     for a in range(p):
         for b in range(p):
             for u in range(2):
@@ -237,6 +247,19 @@ def _put_block(rows, cols, vals, m, nodes, block):
                     vals[m] = block[2 * a + u, 2 * b + v]
                     m += 1
     return m
+
+
+@njit(cache=True)
+def _put(rows, cols, vals, m, r, c, v):
+    """One triplet (r, c, v) at index m, or in assembly mode (``cols`` empty) v added to the
+    CSC data at ``rows[m]``; returns m + 1."""
+    if cols.shape[0] == 0:
+        vals[rows[m]] += v
+    else:
+        rows[m] = r
+        cols[m] = c
+        vals[m] = v
+    return m + 1
 
 
 @njit(cache=True)
@@ -282,18 +305,41 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
     """The exact Hessian's triplets, term by term in a fixed order (bending, stretching,
     confinement, the cavity's wall when ``radius`` is finite, the hard core's pairs)."""
     n = pos.shape[0]
-    wall = math.isfinite(radius)
-    size = 36 * (n - 2) + 16 * (n - 1) + (6 if wall else 2) * n + 36 * ks.shape[0]
+    size = 36 * (n - 2) + 16 * (n - 1) + (6 if math.isfinite(radius) else 2) * n
+    size += 36 * ks.shape[0]
     rows = np.empty(size, dtype=np.int64)
     cols = np.empty(size, dtype=np.int64)
     vals = np.empty(size)
+    m = _hessian_terms(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width,
+                       strength, project, project_bending, radius, rows, cols, vals)  # fmt: skip
+    return rows[:m], cols[:m], vals[:m]
+
+
+@njit(cache=True)
+def _hessian_values(where, nnz, pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
+                    width, strength, project, project_bending=False, radius=math.inf):  # fmt: skip
+    """The CSC data of the exact Hessian in a known pattern, ``where[e]`` the entry triplet e
+    of :func:`_hessian_triplets` adds to: the same sums in the same order (bit for bit its
+    triplets scattered), without the triplet arrays. A candidate pair outside the core adds
+    nothing (its zeros change no sum: the data start at +0.0 and a sum in round-to-nearest
+    never becomes -0.0)."""
+    data = np.zeros(nnz)
+    _hessian_terms(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
+                   project, project_bending, radius, where, np.empty(0, dtype=np.int64),
+                   data)  # fmt: skip
+    return data
+
+
+@njit(cache=True)
+def _hessian_terms(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js, width, strength,
+                   project, project_bending, radius, rows, cols, vals):  # fmt: skip
+    """Every term's blocks from triplet index 0 (triplets, or assembly mode: ``_put_block``)."""
     m = _bending_triplets(pos, k_b, s, theta_p, rest, project_bending, rows, cols, vals, 0)
     m = _stretching_triplets(pos, k_s, l0, rows, cols, vals, m)
-    m = _confinement_triplets(n, lam, weights, rows, cols, vals, m)
-    if wall:
+    m = _confinement_triplets(pos.shape[0], lam, weights, rows, cols, vals, m)
+    if math.isfinite(radius):
         m = _wall_triplets(pos, radius, width, strength, rows, cols, vals, m)
-    m = _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m)
-    return rows[:m], cols[:m], vals[:m]
+    return _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m)
 
 
 @njit(cache=True)
@@ -364,10 +410,7 @@ def _confinement_triplets(n, lam, weights, rows, cols, vals, m):
     """Confinement, 2 λ w_i I: two diagonal entries per node from index m. Returns the next."""
     for i in range(n):
         for u in range(2):
-            rows[m] = 2 * i + u
-            cols[m] = 2 * i + u
-            vals[m] = 2.0 * lam * weights[i]
-            m += 1
+            m = _put(rows, cols, vals, m, 2 * i + u, 2 * i + u, 2.0 * lam * weights[i])
     return m
 
 
@@ -390,10 +433,8 @@ def _wall_triplets(pos, radius, width, strength, rows, cols, vals, m):
             nu = nx if u == 0 else ny
             for v in range(2):
                 nv = nx if v == 0 else ny
-                rows[m] = 2 * i + u
-                cols[m] = 2 * i + v
-                vals[m] = c2 * nu * nv + c1 * ((1.0 if u == v else 0.0) - nu * nv)
-                m += 1
+                val = c2 * nu * nv + c1 * ((1.0 if u == v else 0.0) - nu * nv)
+                m = _put(rows, cols, vals, m, 2 * i + u, 2 * i + v, val)
     return m
 
 
@@ -423,6 +464,9 @@ def _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m
         if dist <= 0.0 or dist >= width:
             # a candidate outside the core: zeros, so that the pattern is that of the neighbour
             # list and does not change while the list holds (fixed-pattern assembly)
+            if cols.shape[0] == 0:  # assembly: zeros add nothing
+                m += 36
+                continue
             block6[:, :] = 0.0
             m = _put_block(rows, cols, vals, m, nodes3, block6)
             continue

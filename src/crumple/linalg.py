@@ -114,14 +114,15 @@ def _row_patterns(n, ap, ai, parent, lp):
 
 @njit(cache=True)
 def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, first,
-            first_value):  # fmt: skip
+            first_value, stop=False):  # fmt: skip
     """Numeric LDLᵀ of A + diag(shift) into (lp, li, lx, d); returns (negative, modified).
 
     QDLDL's up-looking factorisation with its symbolic part precomputed (:func:`_row_patterns`:
     the same operations in the same order, without the elimination-tree walks).
     ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
     a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
-    the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``.
+    the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``. With
+    ``stop`` the factorisation ends there (rows of L up to k done, ``modified`` = 1).
     """
     y = np.zeros(n)
     dinv = np.empty(n)
@@ -152,6 +153,9 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
                 first[0] = k
                 first_value[0] = dk
             modified += 1
+            if stop:
+                d[k] = dk
+                return negative, modified
             dk = max(abs(dk), floor[k]) if dk == dk else floor[k]
         d[k] = dk
         dinv[k] = 1.0 / dk if dk != 0.0 else np.inf
@@ -188,7 +192,7 @@ def _abs_weighted_row_max(indptr, indices, data, u):
 
 @njit(cache=True)
 def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp, li, lx, d,
-                     first):  # fmt: skip
+                     first, stop=False):  # fmt: skip
     """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
     entry e is ``data[src[e]]``), shift and floor given in the original order (empty: none;
     an empty floor: no modification), gathered and permuted here."""
@@ -197,7 +201,8 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp,
     modify = floor.shape[0] > 0
     fl = floor[perm] if modify else np.zeros(n)
     first_value = np.zeros(1)
-    return _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first, first_value)
+    return _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first, first_value,
+                   stop)  # fmt: skip
 
 
 _EMPTY = np.empty(0)
@@ -419,13 +424,23 @@ class Factorization:
         (Sylvester), exact up to round-off, when ``modified == 0``.
     modified : int
         Pivots raised to their floor (0: this is the factor of the matrix itself).
+    complete : bool
+        False for a trial (``LDLT.factorize(..., trial=True)``) that stopped at its first pivot
+        below the floor: ``modified`` is then 1, ``negative`` counts the pivots up to it, and
+        only :meth:`negative_direction` may be used.
     """
 
-    __slots__ = ("_d", "_lx", "_sym", "first_modified", "modified", "negative")
+    __slots__ = ("_d", "_lx", "_sym", "complete", "first_modified", "modified", "negative")
 
     def __init__(self, sym, lx, d, negative, modified):
         self._sym, self._lx, self._d = sym, lx, d
         self.negative, self.modified = int(negative), int(modified)
+        self.complete = True  # False: a trial stopped at its first modified pivot
+
+    def _check_complete(self):
+        if not self.complete:
+            raise ValueError("a trial factorisation stopped at its first modified pivot: "
+                             "it cannot solve")  # fmt: skip
 
     @property
     def positive_definite(self) -> bool:
@@ -433,6 +448,7 @@ class Factorization:
 
     def solve(self, b) -> np.ndarray:
         """(the factored matrix)⁻¹ b for a vector b of length n."""
+        self._check_complete()
         s = self._sym
         b = np.ascontiguousarray(b, dtype=np.float64).ravel()
         return _solve(s.n, s.lp, s.ai_l, self._lx, self._d, s.perm, b)
@@ -455,6 +471,7 @@ class Factorization:
         >>> ok, np.round(s, 6).tolist()          # the spring stops x_0 at 0.25
         (True, [0.25, 1.0])
         """
+        self._check_complete()
         sym = self._sym
         return _spring_solve(
             sym.n, sym.lp, sym.ai_l, self._lx, self._d, sym.perm,
@@ -511,13 +528,19 @@ class LDLT:
             self.analyses += 1
         return self._sym
 
-    def factorize(self, a, *, shift=None, floor=None) -> Factorization:
+    def factorize(self, a, *, shift=None, floor=None, trial=False) -> Factorization:
         """Factorise ``a + diag(shift)`` (a symmetric CSC matrix holding both triangles: SciPy
         or :class:`CSC`; a dense array is converted).
 
         With ``floor`` (a vector), pivots below it are raised (modified LDLᵀ): the result is
-        always positive definite and solves a nearby positive definite system.
+        always positive definite and solves a nearby positive definite system. With
+        ``trial`` (and a floor) the factorisation stops at the first pivot below the floor:
+        enough to know whether the matrix passes and, if not, its
+        :meth:`Factorization.negative_direction`, but not to solve with (``complete`` False).
+        It counts as a factorisation.
         """
+        if trial and floor is None:
+            raise ValueError("a trial factorisation needs a floor")
         if isinstance(a, CSC):
             pass
         elif not sp.issparse(a):
@@ -526,16 +549,17 @@ class LDLT:
             a = a.tocsc()
         s = self.symbolic(a)
         n = s.n
-        lx = np.empty(s.l_nnz)
+        lx = np.zeros(s.l_nnz) if trial else np.empty(s.l_nnz)  # rows past a stop: zeros
         d = np.empty(n)
         first = np.full(1, -1, dtype=np.int64)
         neg, mod = _factor_permuted(
             s.src, np.ascontiguousarray(a.data, dtype=np.float64), s.perm,
             _EMPTY if shift is None else np.ascontiguousarray(shift, dtype=np.float64),
             _EMPTY if floor is None else np.ascontiguousarray(floor, dtype=np.float64),
-            n, s.ap, s.ai, s.rp, s.rc, s.rpos, s.lp, s.ai_l, lx, d, first,
+            n, s.ap, s.ai, s.rp, s.rc, s.rpos, s.lp, s.ai_l, lx, d, first, bool(trial),
         )  # fmt: skip
         self.factorizations += 1
         f = Factorization(s, lx, d, neg, mod)
         f.first_modified = int(first[0])
+        f.complete = not (trial and mod)
         return f

@@ -21,6 +21,8 @@ def _solve(n, lp, li, lx, d, perm, b):
         x[i] = b[perm[i]]
     for i in range(n):
         xi = x[i]
+        if xi == 0.0:  # nothing to eliminate (a spring's sparse row: most of L is skipped)
+            continue
         for p in range(lp[i], lp[i + 1]):
             x[li[p]] -= lx[p] * xi
     for i in range(n):

@@ -48,6 +48,8 @@ SKIP_MAX = 8
 #: How many times :func:`_barrier_step` lists the barriers: for the Newton step, then for each
 #: step found, while that adds springs.
 RELISTINGS = 3
+#: Shifts σM :func:`_direction` tries on the fallback before it solves with the modified factor.
+SHIFTS = 60
 
 
 def newton(
@@ -400,13 +402,13 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         st.nhev += 1
         h = hess(st.x)
         st.fres = _force_resolution(h, st.x)
-        f = ldl.factorize(h, floor=floor)
+        f = ldl.factorize(h, floor=floor, trial=True)  # only used if it passes
         pin = None
         if f.modified and st.zero_modes is not None:  # indefinite along a zero mode only?
             w = st.zero_modes(st.x)
             pin = _gauge_pin(h, w)
         if pin is not None:
-            f = ldl.factorize(h, shift=pin, floor=floor)
+            f = ldl.factorize(h, shift=pin, floor=floor, trial=True)
         if f.modified == 0:
             st.skip = 0
             st.factor, st.model, st.exact = f, _model_of(h, pin), True
@@ -423,8 +425,8 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     pin = None if w is None else _gauge_pin(hs, w)
     pin = 0.0 if pin is None else pin
     sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
-    for _ in range(60):
-        f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor)
+    for attempt in range(SHIFTS):  # the last one complete: its modified factor is the step's
+        f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor, trial=attempt < SHIFTS - 1)
         if f.modified == 0:
             st.sigma = sigma
             st.factor, st.model = f, _model_of(hs, sigma * m + pin)
