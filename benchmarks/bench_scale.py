@@ -9,6 +9,7 @@
     python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
     python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
     python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
+    python benchmarks/bench_scale.py curved [N …]    # default ramps, relax.CURVED_STEPS off/on
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -316,6 +317,46 @@ def _accurate_ramps(ns, modes, relax):
                   flush=True)  # fmt: skip
 
 
+def bench_curved(ns=(), seeds=(0, 1, 2, 3)):
+    """Curved trial points (``relax.CURVED_STEPS``) off and on, default ramp, same process:
+    the paper's wire (N = 100, per length and per node) over ``seeds``, then the continuum
+    wire at each N of ``ns`` (seed 0). Per ramp: iterations, evaluations, curved steps taken,
+    stages converged, CPU, the final energy (which branch the ramp ended on)."""
+    from crumple import relax
+
+    default = relax.CURVED_STEPS
+    cases = [
+        ("N = 100 per length", Wire(k_b=5, k_s=5e5), seeds),
+        ("N = 100 per node", Wire(k_b=5, k_s=5e5, confinement="per-node"), seeds),
+    ]
+    cases += [(f"N = {n} continuum", continuum_wire(n), (0,)) for n in ns]  # fmt: skip
+    run_ramp(Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):
+            for label, wire, ss in cases:
+                print(f"== {label}, default schedule, seeds {list(ss)}: curved steps off / on ==")
+                for mode in (False, True):
+                    relax.CURVED_STEPS = mode
+                    _curved_ramps(wire, ss, "on " if mode else "off")
+    finally:
+        relax.CURVED_STEPS = default
+
+
+def _curved_ramps(wire, seeds, mode):
+    tot_its = tot_t = 0.0
+    for seed in seeds:
+        r, t = cpu(lambda seed=seed: run_ramp(wire, seed=seed))
+        res = [s.result for s in r.stages]
+        its = sum(x.iterations for x in res)
+        tot_its += its
+        tot_t += t
+        print(f"  {mode} seed {seed}: {its:6d} iterations, {sum(x.evaluations for x in res):6d} "
+              f"evaluations, {sum(x.curved_steps for x in res):5d} curved, "
+              f"{sum(x.converged for x in res)}/{len(res)} converged, {t:7.2f} s CPU, "
+              f"E_final = {r.stages[-1].energy.total:.10f}", flush=True)  # fmt: skip
+    print(f"  {mode} total: {int(tot_its)} iterations, {tot_t:.2f} s CPU", flush=True)
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -336,5 +377,7 @@ if __name__ == "__main__":
         bench_gauge([int(v) for v in sys.argv[2:]])
     elif what == "accurate":
         bench_accurate([int(v) for v in sys.argv[2:]])
+    elif what == "curved":
+        bench_curved([int(v) for v in sys.argv[2:]])
     else:
         raise SystemExit(__doc__)

@@ -1075,3 +1075,14 @@ def test_hessian_assembled_into_its_pattern_is_its_triplets_scattered_bit_for_bi
     where = energy._pattern[4]
     assert np.array_equal(again.data, _scatter_add(where, vals, first.indices.shape[0]))
     assert np.array_equal(again.data, first.data)
+
+
+def test_touching_says_whether_a_contact_acts():
+    """``WireEnergy.touching`` is true exactly when the hard-core energy is nonzero."""
+    m, seg, d = 6, 0.08, 0.01
+    w = Wire(k_b=1.0, k_s=1e3, n_segments=2 * m, hard_core=d, hard_core_energy=1e-3)
+    energy = WireEnergy(w, lam=1.0)
+    for gap, inside in ((0.5 * d, True), (2.0 * d, False)):
+        pos = staggered_hairpin(m, seg, gap)
+        assert energy.touching(pos) is inside
+        assert (energy.terms(pos).hard_core > 0) is inside

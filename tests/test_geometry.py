@@ -586,3 +586,73 @@ def test_segment_distance_validation_and_values():
         node_segment_pairs(pos, -1.0)
     with pytest.raises(ValueError, match="cutoff"):
         close_segment_pairs(pos, float("nan"))
+
+
+# --------------------------------------------------------------------------------------------
+# The curved step: segments turned, not their ends moved
+# --------------------------------------------------------------------------------------------
+
+
+def _chain(seed, n, spread=0.3):
+    rng = np.random.default_rng(seed)
+    return np.cumsum(rng.normal(size=(n, 2)) * spread, axis=0), rng
+
+
+def _quarter_turn(v):
+    return np.column_stack([-v[:, 1], v[:, 0]])
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 60), omega=st.floats(-3.0, 3.0))
+def test_curved_step_rotates_a_chain_rigidly_at_any_angle(seed, n, omega):
+    """The linearised rotation about the centroid, p = ω J (x - x̄), taken along the curve, is
+    the rotation by ω itself (the straight step would stretch the chain by 1 + ω²)."""
+    from crumple.geometry import curved_step
+
+    x, _ = _chain(seed, n)
+    c = x.mean(axis=0)
+    y = curved_step(x, omega * _quarter_turn(x - c), 1.0)
+    rot = np.array([[math.cos(omega), -math.sin(omega)], [math.sin(omega), math.cos(omega)]])
+    np.testing.assert_allclose(y, c + (x - c) @ rot.T, atol=1e-12 * (1 + np.abs(x).max()))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 40))
+def test_curved_step_is_the_straight_step_to_first_order(seed, n):
+    """A translation is exact; for any step the curve leaves x + αp at second order in α
+    (halving α divides the gap by 4), and its centroid moves as the straight step's."""
+    from crumple.geometry import curved_step
+
+    x, rng = _chain(seed, n)
+    shift = rng.normal(size=2)
+    np.testing.assert_array_equal(curved_step(x, np.tile(shift, (n, 1)), 0.3), x + 0.3 * shift)
+    p = rng.normal(size=(n, 2)) * 0.1
+    gaps = [np.abs(curved_step(x, p, a) - (x + a * p)).max() for a in (1e-2, 5e-3)]
+    if gaps[0] > 1e-13:
+        assert gaps[1] / gaps[0] == pytest.approx(0.25, rel=0.05)
+    y = curved_step(x, p, 0.7)
+    np.testing.assert_allclose(y.mean(axis=0), (x + 0.7 * p).mean(axis=0), atol=1e-13)
+
+
+def test_curved_step_turns_a_straight_chain_without_stretching_it():
+    """Transverse moves of a straight chain turn its segments: their lengths stay 1 to
+    round-off along the curve, and grow by ~δ²/2 along the straight step."""
+    from crumple.geometry import curved_step, segment_lengths
+
+    n = 30
+    x = np.column_stack([np.arange(n, dtype=float), np.zeros(n)])
+    p = np.column_stack([np.zeros(n), np.random.default_rng(1).normal(size=n) * 0.2])
+    np.testing.assert_allclose(segment_lengths(curved_step(x, p, 1.0)), 1.0, rtol=1e-14)
+    assert segment_lengths(x + p).max() > 1.01
+
+
+def test_curved_step_rejects_bad_input():
+    from crumple.geometry import curved_step
+
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.0]])
+    with pytest.raises(ValueError, match="zero length"):
+        curved_step(x, np.zeros_like(x))
+    with pytest.raises(ValueError, match="shape"):
+        curved_step(x[:2], np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="finite"):
+        curved_step(x[:2], np.full((2, 2), np.nan))

@@ -11,6 +11,7 @@ physical tolerance.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -946,3 +947,76 @@ def test_lengthened_steps_keep_a_ramp_at_true_equilibria(monkeypatch):
     assert on.stages[-1].energy.hard_core > 0
     assert any(a.result.evaluations != b.result.evaluations
                for a, b in zip(on.stages, off.stages, strict=True))  # fmt: skip
+
+
+# --------------------------------------------------------------------------------------------
+# Curved trial points (retract)
+# --------------------------------------------------------------------------------------------
+
+
+def _ring(k=1e4):
+    """A stiff ring valley k (|x| - 1)² plus a soft tilt -x_1 (minimum at (0, 1 + 1/(2k))):
+    straight steps along the valley leave it, curved ones (rotations about 0) follow it."""
+
+    def fun(x):
+        r = math.hypot(*x)
+        return k * (r - 1.0) ** 2 - x[1], 2 * k * (r - 1.0) * x / r - np.array([0.0, 1.0])
+
+    def hess(x):
+        r = math.hypot(*x)
+        u = x / r
+        return 2 * k * np.outer(u, u) + 2 * k * (r - 1.0) / r * (np.eye(2) - np.outer(u, u))
+
+    def turn(x, p, alpha):  # rotate by the step's angular part, move radially by its radial part
+        r, u = math.hypot(*x), x / math.hypot(*x)
+        t = np.array([-u[1], u[0]])
+        phi = alpha * float(p @ t) / r
+        c, s = math.cos(phi), math.sin(phi)
+        return (r + alpha * float(p @ u)) * np.array([c * u[0] - s * u[1], s * u[0] + c * u[1]])
+
+    return fun, hess, turn
+
+
+def test_curved_trial_points_follow_a_curved_valley_and_never_raise_the_energy():
+    """From the far side of the ring, curved trials reach the same minimum as straight ones,
+    in fewer iterations, taking curved steps; every accepted step lowers the energy."""
+    fun, hess, turn = _ring()
+    x0 = np.array([0.0, -1.0]) + np.array([1e-3, 0.0])
+    seen = []
+    curved = newton(fun, x0, hess=hess, retract=turn, maxiter=500,
+                    callback=lambda it, x, e, f: seen.append(e))  # fmt: skip
+    straight = newton(fun, x0, hess=hess, maxiter=500)
+    assert curved.converged and straight.converged
+    np.testing.assert_allclose(curved.x, straight.x, atol=1e-5)  # ftol 1e-6, unit curvature
+    assert curved.curved_steps > 0 and straight.curved_steps == 0
+    assert curved.iterations < straight.iterations
+    assert all(b <= a + resolution(a) for a, b in itertools.pairwise(seen))
+
+
+def test_a_curve_that_is_never_better_leaves_newton_on_its_straight_steps():
+    """A retraction that overshoots (x + 3αp) is tried and refused where it is worse: the
+    same minimum, found by straight steps wherever the curve does not do better."""
+    fun, hess, _ = _ring()
+    x0 = np.array([0.3, -0.9])
+    r = newton(fun, x0, hess=hess, retract=lambda x, p, a: x + 3.0 * a * p, maxiter=500)
+    ref = newton(fun, x0, hess=hess, maxiter=500)
+    assert r.converged
+    np.testing.assert_allclose(r.x, ref.x, atol=1e-5)
+
+
+def test_retract_cannot_be_combined_with_fixed_rows():
+    f, a_mat, _ = bowl(3, 0)
+    with pytest.raises(ValueError, match="retract cannot be combined"):
+        newton(f, np.ones((3, 2)), hess=lambda x: a_mat, fixed=np.array([True, False, False]),
+               retract=lambda x, p, a: x + a * p)  # fmt: skip
+
+
+def test_a_retraction_that_offers_no_point_leaves_newton_bit_for_bit_unchanged():
+    """``retract`` may return None (no curved point here): the iterates are then exactly those
+    of the straight line search."""
+    fun, hess, _ = _ring()
+    x0 = np.array([0.3, -0.9])
+    r = newton(fun, x0, hess=hess, retract=lambda x, p, a: None, maxiter=500)
+    ref = newton(fun, x0, hess=hess, maxiter=500)
+    assert np.array_equal(r.x, ref.x) and r.iterations == ref.iterations
+    assert r.evaluations == ref.evaluations and r.curved_steps == 0

@@ -214,6 +214,29 @@ def test_default_ramp_converges_at_every_stage():
     assert np.max(np.hypot(*(final - final.mean(axis=0)).T)) < 0.3
 
 
+def test_curved_steps_keep_a_contact_ramp_at_true_equilibria_and_are_opt_in(monkeypatch):
+    """With curved trial points (opt-in) a contact ramp ends every stage converged and
+    stable, never crossing, no accepted step raising the energy, and some accepted steps are
+    curved (before contacts act); off (the default) none are. With fixed nodes they are never
+    used."""
+    wire, ramp = Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0))
+    assert not relax.CURVED_STEPS
+    monkeypatch.setattr(relax, "CURVED_STEPS", True)
+    on, audit = audited_ramp(wire, ramp, seed=2)
+    assert on.converged and not audit.violations, audit.violations[:5]
+    assert sum(s.result.curved_steps for s in on.stages) > 0
+    assert on.stages[-1].energy.hard_core > 0
+    assert_stage_bookkeeping(on)
+    monkeypatch.setattr(relax, "CURVED_STEPS", False)
+    off = run_ramp(wire, ramp, seed=2)
+    assert off.converged and all(s.result.curved_steps == 0 for s in off.stages)
+    monkeypatch.setattr(relax, "CURVED_STEPS", True)
+    fixed = np.zeros(wire.n_nodes, dtype=bool)
+    fixed[0] = True
+    r = relax.minimize_wire(wire, on.stages[1].positions, 30.0, fixed=fixed)
+    assert r.converged and r.curved_steps == 0
+
+
 def test_default_schedule():
     s = default_schedule()
     assert len(s) == 44

@@ -47,6 +47,7 @@ from .energy_kernels import (
     _hard_core_eg,
     _hessian_triplets,
     _hessian_values,
+    _in_core,
     _line_admissible,
     _line_energy,
     _line_prepare,
@@ -498,6 +499,13 @@ class WireEnergy:
             if where.shape[0] == 0 or where[0] >= 0:
                 return (ks, js, indptr, indices, where)
         return (ks, js, *_csc_pattern(rows, cols, ndof))
+
+    def touching(self, x) -> bool:
+        """Whether some node is inside the hard core of a segment at ``x`` (a contact acts):
+        the hard-core energy is nonzero. ``x`` trusted as in :meth:`hessian_csc`."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        ks, js = self._pairs(x)
+        return bool(_in_core(x, ks, js, self.wire.hard_core))
 
     def barriers(self, x, step):
         """The hard-core barriers that ``step`` may enter from ``x``, for the Newton model.

@@ -119,6 +119,19 @@ def _hard_core_eg(pos, ks, js, width, strength, grad):
 
 
 @njit(cache=True)
+def _in_core(pos, ks, js, width):
+    """Whether any candidate (node, segment) pair is inside the hard core (D < width)."""
+    for m in range(ks.shape[0]):
+        k, j = ks[m], js[m]
+        dist, _, _, _ = _point_segment(
+            pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
+        )
+        if dist < width:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _wall_eg(pos, radius, width, strength, grad):
     """The cavity's barrier ε Σ b(δ_i/d), δ_i = R_c - |x_i|; nothing when R_c is infinite."""
     if not math.isfinite(radius):

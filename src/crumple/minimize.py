@@ -30,20 +30,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from . import minimize_expand
 from .linalg import CSC, LDLT
 from .linalg_springs import new_rows, spring_step
 from .minimize_accurate import _accurate_check, _constrained_action, _recheck
+from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
 
-_EPS = float(np.finfo(float).eps)
-RADIUS_SHRINK = 4.0
 RESOLUTION_FACTOR = 10.0
-RADIUS_GROW = 4.0
 SKIP_MAX = 8
 #: How many times :func:`_barrier_step` lists the barriers: for the Newton step, then for each
 #: step found, while that adds springs.
@@ -73,6 +70,7 @@ def newton(
     fixed=None,
     barriers: Callable[[np.ndarray, np.ndarray], tuple] | None = None,
     hess_action: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -178,6 +176,14 @@ def newton(
         resolve (its resolution, ``minimize_accurate._assembly_resolution``, above τ): the
         lowest eigenvalue of (H, M) is then found by LOBPCG on this product, and the point is
         a minimum if it is >= -τ (LOBPCG settled); else the escape is as without it.
+    retract : callable, optional
+        ``retract(x, p, alpha) -> x'``: a point on a curve through x whose tangent is p
+        (x' = x + αp + O(α²)), e.g. a chain with its segments turned instead of their ends
+        moved (:func:`crumple.geometry.curved_step`), or None where it offers none (the
+        straight line search is then unchanged). Each trial of the line search then also
+        evaluates x' and takes, of x + αp and x', the lower energy of those that pass the same
+        tests (Armijo on the slope gᵀp, ``step_limit`` on the whole chord x' - x, ``feasible``).
+        Not with ``fixed``: a curve need not keep the fixed rows.
 
     Returns
     -------
@@ -198,6 +204,8 @@ def newton(
         raise ValueError(f"curvature_tol must be positive, got {curvature_tol}")
     m = _metric(metric, x)
     mask = _fixed_mask(fixed, x)
+    if mask is not None and retract is not None:
+        raise ValueError("retract cannot be combined with fixed rows (a curve can move them)")
     if mask is not None:
         fun, hess, hess_fallback = _constrained(mask, fun, hess, hess_fallback)
         hess_action = _constrained_action(mask, hess_action)
@@ -230,7 +238,7 @@ def newton(
         if st.it >= maxiter:
             break
         failure = _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit,
-                               feasible, armijo, max_backtracks, max_step)  # fmt: skip
+                               feasible, armijo, max_backtracks, max_step, retract)  # fmt: skip
         if failure:
             message = failure
             break
@@ -272,7 +280,7 @@ def _converged(st, ftol) -> str:
 
 
 def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit, feasible,
-                 armijo, max_backtracks, max_step):  # fmt: skip
+                 armijo, max_backtracks, max_step, retract=None):  # fmt: skip
     """One Newton iteration: the direction (with the barriers' springs, zero on the fixed
     entries) and its line search; ``st`` updated; None, or why the iteration failed."""
     st.it += 1
@@ -283,7 +291,8 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
         p.reshape(-1)[st.mask] = 0.0
     if not np.isfinite(p).all():
         return "could not make the Hessian positive definite (non-finite factor)"
-    return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step)
+    return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step,
+                        retract)  # fmt: skip
 
 
 def _result(st, ldl, ftol, message) -> MinimizeResult:
@@ -303,6 +312,7 @@ def _result(st, ldl, ftol, message) -> MinimizeResult:
         method="newton",
         factorizations=ldl.factorizations,
         force_resolution=st.fres,
+        curved_steps=st.curved,
     )
 
 
@@ -381,6 +391,7 @@ class _State:
     exact: bool = True  # the last direction is the exact Hessian's Newton step
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
+    curved: int = 0  # accepted steps that were the retracted (curved) point
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
@@ -536,59 +547,3 @@ def _metric(metric, x) -> np.ndarray:
     if w.size != x.size or not np.all(np.isfinite(w)) or not np.all(w > 0):
         raise ValueError(f"metric must hold {x.size} (or one per row) positive weights")
     return w
-
-
-def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step):
-    """Cap, cut and backtrack the step ``p``; update ``st`` and its radius; None or why not."""
-    slope = float(np.vdot(st.g, p))
-    if not (slope < 0 and np.isfinite(p).all()):
-        return "the Newton step is not a descent direction (numerical breakdown)"
-    biggest = max_force(p)  # the largest row displacement
-    alpha = 1.0
-    capped = biggest > st.radius
-    if capped:
-        alpha = st.radius / biggest
-    cut = False
-    if step_limit is not None:
-        safe = step_limit(st.x, alpha * p)
-        if safe < 1.0:
-            alpha *= 0.8 * safe
-            cut = True
-    halvings = 0
-    for _ in range(max_backtracks):
-        xt = st.x + alpha * p
-        et, gt = fun(xt)
-        st.nfev += 1
-        if math.isfinite(et):
-            sufficient = et <= st.e + armijo * alpha * slope
-            # below the energy's floating-point resolution only the force can tell a
-            # better point (Hager & Zhang's approximate Wolfe condition)
-            ft = max_force(gt)
-            roundoff = et <= st.e + resolution(st.e) and ft < st.fmax
-            if (sufficient or roundoff) and (feasible is None or feasible(xt)):
-                break
-        alpha *= 0.5
-        halvings += 1
-    else:
-        return f"line search failed at max force {st.fmax:.3g}"
-    if minimize_expand.EXPANSIONS and not (halvings or capped or cut or st.exact):  # in full
-        alpha, xt, et, gt, ft = minimize_expand._expand(
-            st, fun, p, step_limit, feasible, armijo, slope, biggest, max_step, alpha, xt, et, gt,
-            ft,
-        )  # fmt: skip
-    moved = alpha * biggest
-    if halvings:  # shrink towards what worked, by 4 at most: a poor direction is not a radius
-        st.radius = max(moved, st.radius / RADIUS_SHRINK)
-    elif max_step is not None:  # accepted at once: let it grow to 4 times the step
-        st.radius = min(max(st.radius, RADIUS_GROW * moved), max_step)
-    st.x, st.e, st.g, st.fmax = xt, float(et), gt, ft
-    return None
-
-
-def resolution(energy: float) -> float:
-    """Floating-point resolution of an energy value: 16 ε_mach |E| (and at least 1e-300).
-
-    >>> bool(resolution(1.0) == 16 * np.finfo(float).eps)
-    True
-    """
-    return max(16.0 * _EPS * abs(energy), 1e-300)

@@ -35,6 +35,9 @@ class MinimizeResult:
         Newton: the force change a one-ulp move of the coordinates can make (times 10): the
         floor below which forces are round-off. ``converged`` means
         ``max_force <= max(ftol, force_resolution)``; the message says which held.
+    curved_steps : int
+        Newton with a ``retract``: the accepted steps that were the curved point, not the
+        straight one.
     converged : bool
         ``max_force <= ftol``.
     ftol : float
@@ -56,6 +59,7 @@ class MinimizeResult:
     method: str
     factorizations: int = 0
     force_resolution: float = 0.0
+    curved_steps: int = 0
 
 
 def max_force(grad) -> float:

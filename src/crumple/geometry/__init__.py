@@ -15,13 +15,15 @@ near-degenerate contacts are never misclassified by round-off.
 
 The package has one module per concept: ``cells`` (the spatial hash), ``crossings`` (the exact
 intersection test), ``distance`` (distances, close pairs, the hard core's node-segment
-neighbour list, lengths and angles) and ``ccd`` (continuous collision detection). Everything
+neighbour list, lengths and angles), ``ccd`` (continuous collision detection) and ``curved``
+(a step that turns segments instead of translating their ends). Everything
 public is imported from here.
 """
 
 from ._input import as_positions
 from .ccd import disc_exit_fraction, max_safe_fraction
 from .crossings import find_crossings, has_crossings
+from .curved import curved_step
 from .distance import (
     close_segment_pairs,
     node_segment_pairs,
@@ -34,6 +36,7 @@ from .distance import (
 __all__ = [
     "as_positions",
     "close_segment_pairs",
+    "curved_step",
     "disc_exit_fraction",
     "find_crossings",
     "has_crossings",
