@@ -6,8 +6,8 @@ whose stretching stiffness is 10⁵ times its bending's) then meets, at second o
 stretching energy that the step's quadratic model did not see, and a Newton step along a large
 rotation is cut back to a fraction of itself. :func:`curved_step` moves the chain along a curve
 with the same tangent ``p`` at α = 0 that turns each segment by its linearised rotation
-δφ = (e × δe)/|e|² and stretches it by its linearised length change (e · δe)/|e|: a rigid
-rotation is then exact at any angle, and a turn adds no stretch.
+``δφ = (e × δe)/|e|²`` and stretches it by its linearised length change ``(e · δe)/|e|``: a
+rigid rotation is then exact at any angle, and a turn adds no stretch.
 """
 
 from __future__ import annotations
@@ -25,14 +25,14 @@ __all__ = ["curved_step"]
 def curved_step(positions, step, alpha: float = 1.0) -> np.ndarray:
     """The chain after the step ``alpha * step`` taken along the curve of turned segments.
 
-    Segment i, e_i = x_{i+1} - x_i, becomes (1 + e·δe/|e|²) R(δφ) e, with δe = α(p_{i+1} - p_i)
-    and δφ = (e × δe)/|e|²; the chain is rebuilt along them and translated so that its
-    centroid moves as that of ``positions + alpha * step``. To first order in α this is the
-    straight step (its tangent at α = 0 is ``step``); a uniform translation is exact, and so is
-    a rigid rotation about the centroid (``step = ω J (x - x̄)``, J the quarter turn) at any
-    angle ω. The second-order part is added as a correction to the straight step, computed
-    from small quantities, so rebuilding the chain adds no round-off of the size of the
-    coordinates.
+    Segment i, ``e = x[i+1] - x[i]``, becomes ``(1 + e·δe/|e|²) R(δφ) e``, with
+    ``δe = α (p[i+1] - p[i])`` and ``δφ = (e × δe)/|e|²``; the chain is rebuilt along them
+    and translated so that its centroid moves as that of ``positions + alpha * step``. To
+    first order in α this is the straight step (its tangent at α = 0 is ``step``); a uniform
+    translation is exact, and so is a rigid rotation about the centroid
+    (``step = ω J (x - x̄)``, J the quarter turn) at any angle ω. The second-order part is
+    added as a correction to the straight step, computed from small quantities, so
+    rebuilding the chain adds no round-off of the size of the coordinates.
 
     >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
     >>> p = np.array([[0.0, 1.0], [0.0, 0.0], [0.0, -1.0]])   # turning about the middle node
