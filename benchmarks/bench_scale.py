@@ -9,7 +9,7 @@
     python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
     python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
     python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
-    python benchmarks/bench_scale.py curved [N …]    # default ramps, relax.CURVED_STEPS off/on
+    python benchmarks/bench_scale.py curved [N …] [seeds=0,1]  # default ramps, CURVED_STEPS off/on
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -317,19 +317,24 @@ def _accurate_ramps(ns, modes, relax):
                   flush=True)  # fmt: skip
 
 
-def bench_curved(ns=(), seeds=(0, 1, 2, 3)):
+def bench_curved(ns=(), seeds=(0, 1, 2, 3), big_seeds=(0,)):
     """Curved trial points (``relax.CURVED_STEPS``) off and on, default ramp, same process:
-    the paper's wire (N = 100, per length and per node) over ``seeds``, then the continuum
-    wire at each N of ``ns`` (seed 0). Per ramp: iterations, evaluations, curved steps taken,
-    stages converged, CPU, the final energy (which branch the ramp ended on)."""
+    the paper's wire (N = 100, per length and per node) over ``seeds``, the plastic per-node
+    wire of the reproduction at three (s, θ_p) over seeds 0–1, then the continuum wire at
+    each N of ``ns`` over ``big_seeds``. Per ramp: iterations, evaluations, curved steps
+    taken, stages converged, CPU, the final energy (which branch the ramp ended on)."""
     from crumple import relax
+    from crumple.model import Plasticity
 
     default = relax.CURVED_STEPS
     cases = [
         ("N = 100 per length", Wire(k_b=5, k_s=5e5), seeds),
         ("N = 100 per node", Wire(k_b=5, k_s=5e5, confinement="per-node"), seeds),
     ]
-    cases += [(f"N = {n} continuum", continuum_wire(n), (0,)) for n in ns]  # fmt: skip
+    for s_, tp in ((0.05, 0.1), (0.4, 0.1), (0.4, 0.5)):
+        wire = Wire(k_b=5, k_s=5e5, confinement="per-node", plasticity=Plasticity(s=s_, theta_p=tp))
+        cases.append((f"N = 100 per node, plastic s = {s_}, θ_p = {tp}", wire, (0, 1)))
+    cases += [(f"N = {n} continuum", continuum_wire(n), big_seeds) for n in ns]  # fmt: skip
     run_ramp(Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
     try:
         with threadpool_limits(limits=1, user_api="blas"):
@@ -377,7 +382,9 @@ if __name__ == "__main__":
         bench_gauge([int(v) for v in sys.argv[2:]])
     elif what == "accurate":
         bench_accurate([int(v) for v in sys.argv[2:]])
-    elif what == "curved":
-        bench_curved([int(v) for v in sys.argv[2:]])
+    elif what == "curved":  # curved N … [seeds=0,1]: the continuum wire's seeds
+        seeds = [a for a in sys.argv[2:] if a.startswith("seeds=")]
+        big = tuple(int(v) for v in seeds[0][6:].split(",")) if seeds else (0,)
+        bench_curved([int(v) for v in sys.argv[2:] if not v.startswith("seeds=")], big_seeds=big)
     else:
         raise SystemExit(__doc__)

@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from crumple.energy import (
@@ -1063,11 +1063,17 @@ def test_hessian_assembled_into_its_pattern_is_its_triplets_scattered_bit_for_bi
 
     rng = np.random.default_rng(seed)
     m, seg, d = 6, 0.08, 0.01
-    pos = staggered_hairpin(m, seg, 0.5 * d) + 1e-4 * rng.standard_normal((2 * m + 1, 2))
+    pos = staggered_hairpin(m, seg, d) + 3e-3 * rng.standard_normal((2 * m + 1, 2))
     w = Wire(k_b=2.0, k_s=1e3, n_segments=2 * m, hard_core=d, hard_core_energy=1e-3,
              plasticity=Plasticity(s=0.3, theta_p=0.2),
              cavity_radius=2.0 if cavity else None)  # fmt: skip
     energy = WireEnergy(w, lam=3.0, rest_angles=0.1 * rng.standard_normal(2 * m - 1))
+    from crumple.geometry import has_crossings, point_segment_distance
+
+    assume(not has_crossings(pos))
+    ks, js = energy._pairs(pos)
+    dist = [point_segment_distance(pos[k], pos[j], pos[j + 1]) for k, j in zip(ks, js, strict=True)]
+    assume(min(dist) < d < max(dist))  # pairs in the core and candidates outside it
     first = energy.hessian_csc(pos, project_contacts=project, project_bending=project)
     again = energy.hessian_csc(pos, project_contacts=project, project_bending=project)
     assert again.indices is first.indices  # the pattern kept: the second one went direct
@@ -1084,5 +1090,7 @@ def test_touching_says_whether_a_contact_acts():
     energy = WireEnergy(w, lam=1.0)
     for gap, inside in ((0.5 * d, True), (2.0 * d, False)):
         pos = staggered_hairpin(m, seg, gap)
-        assert energy.touching(pos) is inside
         assert (energy.terms(pos).hard_core > 0) is inside
+        rebuilds = energy.rebuilds
+        assert energy.touching(pos) is inside
+        assert energy.rebuilds == rebuilds  # it reads the list, never rebuilds it

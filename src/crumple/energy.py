@@ -502,9 +502,11 @@ class WireEnergy:
 
     def touching(self, x) -> bool:
         """Whether some node is inside the hard core of a segment at ``x`` (a contact acts):
-        the hard-core energy is nonzero. ``x`` trusted as in :meth:`hessian_csc`."""
+        the hard-core energy is nonzero. Over the current neighbour list, which it does not
+        rebuild (a hint for the minimiser, not an energy: a list made at a point more than
+        half a skin away can miss a pair). ``x`` trusted as in :meth:`hessian_csc`."""
         x = np.ascontiguousarray(x, dtype=np.float64)
-        ks, js = self._pairs(x)
+        ks, js = (self._ks, self._js) if self._ks is not None else self._pairs(x)
         return bool(_in_core(x, ks, js, self.wire.hard_core))
 
     def barriers(self, x, step):

@@ -44,8 +44,8 @@ ACCURATE_STABILITY = True
 #: the curved point of each step, the chain with its segments turned
 #: (:func:`crumple.geometry.curved_step`), and keeps the lower energy; only where no contact
 #: acts (``WireEnergy.touching``). Measured (docs/performance.md, "Curved steps"): the default
-#: N = 100 ramp 2954 → 2123 iterations over seeds 0–3 (CPU −9 %), per node 16 866 → 8118 (CPU
-#: −34 %), the smooth stages 137 → 38 and the buckling stage 51 → 9; but the N = 10⁴ ramp of
+#: N = 100 ramp 2954 → 2105 iterations over seeds 0–3 (CPU −2 %), per node 16 866 → 8348 (CPU
+#: −41 %), the smooth stages 137 → 38 and the buckling stage 51 → 9; but the N = 10⁴ ramp of
 #: the continuum wire (seed 0) took 530 s and left one stage unconverged, where straight steps
 #: converge all 44 in 340 s. So it stays off.
 CURVED_STEPS = False
@@ -214,8 +214,12 @@ def _curved_retraction(energy: WireEnergy):
     lengthened the fallback's steps into more contacts and cost CPU (docs/performance.md,
     "Curved steps"); None tells the line search there is no curved point."""
 
+    last = [None, False]  # the point asked about, and whether a contact acts there
+
     def retract(x, p, alpha):
-        return None if energy.touching(x) else _curved_step(x, p, alpha)
+        if x is not last[0]:  # once per line search (its trials all start from x)
+            last[0], last[1] = x, energy.touching(x)
+        return None if last[1] else _curved_step(x, p, alpha)
 
     return retract
 

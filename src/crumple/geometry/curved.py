@@ -7,7 +7,7 @@ stretching energy that the step's quadratic model did not see, and a Newton step
 rotation is cut back to a fraction of itself. :func:`curved_step` moves the chain along a curve
 with the same tangent ``p`` at α = 0 that turns each segment by its linearised rotation
 ``δφ = (e × δe)/|e|²`` and stretches it by its linearised length change ``(e · δe)/|e|``: a
-rigid rotation is then exact at any angle, and a turn adds no stretch.
+rigid rotation about the centroid is then exact at any angle, and a turn adds no stretch.
 """
 
 from __future__ import annotations
