@@ -45,9 +45,10 @@ ACCURATE_STABILITY = True
 #: (:func:`crumple.geometry.curved_step`), and keeps the lower energy; only where no contact
 #: acts (``WireEnergy.touching``). Measured (docs/performance.md, "Curved steps"): the default
 #: N = 100 ramp 2954 → 2105 iterations over seeds 0–3 (CPU −2 %), per node 16 866 → 8348 (CPU
-#: −41 %), the smooth stages 137 → 38 and the buckling stage 51 → 9; but the N = 10⁴ ramp of
-#: the continuum wire (seed 0) took 530 s and left one stage unconverged, where straight steps
-#: converge all 44 in 340 s. So it stays off.
+#: −41 %), the smooth stages 137 → 38, the buckling stage 51 → 9, the N = 10⁴ ramp of the
+#: continuum wire (seed 0) 6224 → 5409 with every stage converged; off until the full
+#: reproduction and several seeds at N = 10³–10⁴ have been run with it (an earlier form lost
+#: a converged stage at N = 10⁴).
 CURVED_STEPS = False
 
 Method = Literal["newton", "powell"]
