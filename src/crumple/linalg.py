@@ -122,7 +122,8 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
     ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
     a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
     the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``. With
-    ``stop`` the factorisation ends there (rows of L up to k done, ``modified`` = 1).
+    ``stop`` the factorisation ends there (rows of L up to k done, the rest set to zero,
+    ``modified`` = 1).
     """
     y = np.zeros(n)
     dinv = np.empty(n)
@@ -153,8 +154,11 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
                 first[0] = k
                 first_value[0] = dk
             modified += 1
-            if stop:
+            if stop:  # rows past k are not computed: zeros, so a back solve from k reads 0
                 d[k] = dk
+                for r in range(k + 1, n):
+                    for q in range(rp[r], rp[r + 1]):
+                        lx[rpos[q]] = 0.0
                 return negative, modified
             dk = max(abs(dk), floor[k]) if dk == dk else floor[k]
         d[k] = dk
@@ -549,7 +553,7 @@ class LDLT:
             a = a.tocsc()
         s = self.symbolic(a)
         n = s.n
-        lx = np.zeros(s.l_nnz) if trial else np.empty(s.l_nnz)  # rows past a stop: zeros
+        lx = np.empty(s.l_nnz)
         d = np.empty(n)
         first = np.full(1, -1, dtype=np.int64)
         neg, mod = _factor_permuted(
