@@ -22,6 +22,9 @@ def _gauge_entries(w) -> list[tuple[int, int]]:
     """Where to fix the gauge of the zero modes (rows of ``w``): (mode, entry) pairs, the entry
     where the mode is largest now, the entries of the modes before it excluded."""
     w = np.abs(w)
+    if w.shape[0] == 1:  # one mode (the rotation): the loop below without its bookkeeping
+        j = int(np.argmax(w[0]))
+        return [(0, j)] if w[0, j] > 0 else []
     pairs: list[tuple[int, int]] = []
     for k, mode in enumerate(w):
         mode[[j for _, j in pairs]] = 0.0

@@ -261,7 +261,9 @@ def _symmetry_modes(x, wire, lam):
     if cavity and lam != 0 and np.any(center != 0):
         return np.zeros((0, x.size))
     r = x - (0.0 if cavity else center)
-    modes = [np.column_stack([-r[:, 1], r[:, 0]]).ravel()]
-    if lam == 0 and not cavity:
-        modes += [np.tile([1.0, 0.0], len(x)), np.tile([0.0, 1.0], len(x))]
-    return np.array(modes)
+    free = lam == 0 and not cavity
+    modes = np.zeros((3 if free else 1, x.size))
+    modes[0, 0::2], modes[0, 1::2] = -r[:, 1], r[:, 0]  # the rotation
+    if free:  # the two translations
+        modes[1, 0::2] = modes[2, 1::2] = 1.0
+    return modes
