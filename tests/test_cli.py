@@ -11,6 +11,7 @@ from crumple.cli import main, read_positions
 from crumple.energy import energy_terms
 from crumple.model import Plasticity, Wire
 from crumple.observables import measure
+from crumple.storage import load_ramps
 
 
 @pytest.fixture()
@@ -328,6 +329,17 @@ def test_run_echoes_every_parameter_and_warns_on_identical_replicas(capsys, tmp_
     assert "s = 0.3" in err and "theta_p [rad] = 0.2" in err
     assert "rest_angle_sd" in err.split("warning:")[1]
     assert json.loads(out)["wire"]["plasticity"] == {"s": 0.3, "theta_p": 0.2}
+
+
+@pytest.mark.parametrize("flag", ["--curved-steps", "--no-curved-steps"])
+def test_run_curved_steps_flag_reaches_the_stored_ramp(capsys, tmp_path, flag):
+    code, out, err = run_cli(capsys, "run", "--out", tmp_path / "o", "--n-segments", 20,
+                             "--lambdas", "1,10", "--workers", 1, flag)  # fmt: skip
+    assert code == 0, err
+    on = flag == "--curved-steps"
+    assert json.loads(out)["ramp"]["curved_steps"] is on
+    assert f"curved_steps = {on}" in err
+    assert load_ramps(tmp_path / "o" / "ramps.h5")[0].ramp.curved_steps is on
 
 
 def test_help_shows_defaults_and_units(capsys):

@@ -384,6 +384,9 @@ def test_cli_runs_an_injection_and_rejects_unknown_protocol_keys(tmp_path, capsy
                  "--lambdas", "1,2", "--out", str(tmp_path / "r")]) == 2  # fmt: skip
     err = capsys.readouterr().err
     assert "--cavity-radius" in err and "--push" in err and not (tmp_path / "r").exists()
+    assert main(["run", "--protocol", "injection", "--curved-steps", "--n-segments", "30",
+                 "--out", str(tmp_path / "s")]) == 2  # fmt: skip
+    assert "--curved-steps is a ramp flag" in capsys.readouterr().err
 
 
 def test_sweep_protocol_table():

@@ -214,21 +214,17 @@ def test_default_ramp_converges_at_every_stage():
     assert np.max(np.hypot(*(final - final.mean(axis=0)).T)) < 0.3
 
 
-def test_curved_steps_keep_a_contact_ramp_at_true_equilibria_and_are_opt_in(monkeypatch):
-    """With curved trial points (opt-in) a contact ramp ends every stage converged and
-    stable, never crossing, no accepted step raising the energy, and some accepted steps are
-    curved (before contacts act); off (the default) none are. With fixed nodes they are never
-    used."""
-    wire, ramp = Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0))
-    assert not relax.CURVED_STEPS
-    monkeypatch.setattr(relax, "CURVED_STEPS", True)
-    on, audit = audited_ramp(wire, ramp, seed=2)
+def test_curved_steps_keep_a_contact_ramp_at_true_equilibria(monkeypatch):
+    """With curved trial points a contact ramp ends every stage converged and stable, never
+    crossing, no accepted step raising the energy, and some accepted steps are curved (before
+    contacts act); with them off none are. With fixed nodes they are never used."""
+    wire, lams = Wire(k_b=5, k_s=5e5), (1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0)
+    on, audit = audited_ramp(wire, Ramp(lambdas=lams, curved_steps=True), seed=2)
     assert on.converged and not audit.violations, audit.violations[:5]
     assert sum(s.result.curved_steps for s in on.stages) > 0
     assert on.stages[-1].energy.hard_core > 0
     assert_stage_bookkeeping(on)
-    monkeypatch.setattr(relax, "CURVED_STEPS", False)
-    off = run_ramp(wire, ramp, seed=2)
+    off = run_ramp(wire, Ramp(lambdas=lams, curved_steps=False), seed=2)
     assert off.converged and all(s.result.curved_steps == 0 for s in off.stages)
     monkeypatch.setattr(relax, "CURVED_STEPS", True)
     fixed = np.zeros(wire.n_nodes, dtype=bool)
@@ -416,6 +412,8 @@ def test_at_unknown_lambda_raises():
         ({"ftol": 0.0}, "ftol"),
         ({"maxiter": 0}, "maxiter"),
         ({"max_step": -1.0}, "max_step"),
+        ({"curved_steps": "yes"}, "curved_steps"),
+        ({"curved_steps": True, "method": "powell"}, "curved_steps"),
     ],
 )
 def test_ramp_validation(kwargs, word):
@@ -428,6 +426,28 @@ def test_ramp_round_trip():
     assert Ramp.from_dict(ramp.to_dict()) == ramp
     with pytest.raises(ValueError, match="unknown"):
         Ramp.from_dict({"lambda": (1, 2)})
+
+
+def test_ramp_records_the_curved_steps_switch(monkeypatch):
+    """The switch is resolved when the Ramp is made, so that the run id and the sweep
+    workers (which rebuild the Ramp from its dict) hold it; Powell never takes curved steps.
+    Off is the value of the runs before the switch existed: it leaves their ids unchanged."""
+    from crumple.sweep.store import run_id
+
+    wire = Wire(k_b=5, k_s=5e5, n_segments=20)
+    monkeypatch.setattr(relax, "CURVED_STEPS", True)
+    on = Ramp(lambdas=(1, 10))
+    assert on.curved_steps is True and Ramp(method="powell").curved_steps is False
+    monkeypatch.setattr(relax, "CURVED_STEPS", False)
+    off = Ramp(lambdas=(1, 10))
+    assert off.curved_steps is False
+    assert Ramp.from_dict(on.to_dict()).curved_steps is True  # not the module's value now
+    assert run_id(wire, on, 0, 0) != run_id(wire, off, 0, 0)
+    legacy = {k: v for k, v in off.to_dict().items() if k != "curved_steps"}
+    assert "curved_steps" not in legacy and Ramp.from_dict(legacy) == off
+    assert run_id(wire, Ramp.from_dict(legacy), 0, 0) == run_id(wire, off, 0, 0)
+    r = run_ramp(wire, Ramp(lambdas=(1.0, 30.0), curved_steps=True), seed=0)
+    assert r.converged and sum(s.result.curved_steps for s in r.stages) > 0
 
 
 def test_minimize_wire_input_checks():

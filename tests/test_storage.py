@@ -1,6 +1,7 @@
 """Round trip of ramp results through HDF5, atomic writes, and readability without crumple."""
 
 import json
+from dataclasses import replace
 
 import h5py
 import numpy as np
@@ -32,6 +33,19 @@ def test_round_trip_is_exact(tmp_path, results):
             assert sa.result.converged == sb.result.converged
             assert sa.result.message == sb.result.message
             assert sa.result.iterations == sb.result.iterations
+
+
+def test_a_file_from_before_the_curved_steps_switch_reads_as_straight_steps(tmp_path, results):
+    """Files written before ``Ramp.curved_steps`` existed have no such key; their ramps took
+    straight steps only, whatever the default is now."""
+    on = [replace(r, ramp=replace(r.ramp, curved_steps=True)) for r in results]
+    path = save_ramps(tmp_path / "r.h5", on, seed=3)
+    assert all(r.ramp.curved_steps for r in load_ramps(path))
+    with h5py.File(path, "r+") as f:
+        ramp = json.loads(f.attrs["ramp"])
+        del ramp["curved_steps"]
+        f.attrs["ramp"] = json.dumps(ramp)
+    assert all(r.ramp.curved_steps is False for r in load_ramps(path))
 
 
 def test_file_is_plain_hdf5_with_parameters_as_attributes(tmp_path, results):

@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from . import relax
 from .energy import EnergyTerms, WireEnergy
 from .minimize import MinimizeResult
 from .model import Wire
@@ -125,6 +126,12 @@ class Ramp:
         Powell only: Numerical Recipes' stopping rule, a sweep lowering the energy by less than
         this fraction ends the stage (0: always ``maxiter`` sweeps). Default (None): resolved
         here to :data:`POWELL_RTOL` for Powell; None for Newton (and then not in the run id).
+    curved_steps : bool or None
+        Newton only: also try the curved trial point of each step (the retraction of
+        :mod:`crumple.geometry.curved`, which turns segments without stretching them) where no
+        contact acts (:func:`crumple.relax.minimize_wire`). Default (None): resolved here to
+        :data:`crumple.relax.CURVED_STEPS` for Newton, so that ``to_dict``, the run id and the
+        sweep workers hold the switch; always False for Powell.
 
     Examples
     --------
@@ -145,10 +152,18 @@ class Ramp:
     maxiter: int | None = None
     max_step: float = 0.5
     powell_rtol: float | None = None
+    curved_steps: bool | None = None
 
     def __post_init__(self):
         if self.maxiter is None and self.method in DEFAULT_MAXITER:
             object.__setattr__(self, "maxiter", DEFAULT_MAXITER[self.method])
+        if self.curved_steps is None:
+            object.__setattr__(self, "curved_steps", self.method == "newton" and relax.CURVED_STEPS)
+        if not isinstance(self.curved_steps, (bool, np.bool_)):
+            raise ValueError(f"curved_steps must be True or False, got {self.curved_steps!r}")
+        object.__setattr__(self, "curved_steps", bool(self.curved_steps))
+        if self.curved_steps and self.method != "newton":
+            raise ValueError("curved_steps is a parameter of method='newton' only")
         if self.method == "powell" and self.powell_rtol is None:
             object.__setattr__(self, "powell_rtol", POWELL_RTOL)
         if self.method != "powell" and self.powell_rtol is not None:
@@ -351,6 +366,7 @@ def _run_ramp(wire, ramp, rng, progress):
             rng=rng,
             rest_angles=rest,
             rtol=ramp.powell_rtol,
+            curved_steps=ramp.curved_steps,
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x

@@ -396,7 +396,9 @@ def load_ramps(path) -> list[RampResult]:
         if f.attrs.get("format") != FORMAT:
             raise ValueError(f"{path} is not a crumple ramp file")
         wire = Wire.from_dict(json.loads(f.attrs["wire"]))
-        ramp = Ramp.from_dict(json.loads(f.attrs["ramp"]))
+        ramp = json.loads(f.attrs["ramp"])
+        ramp.setdefault("curved_steps", False)  # a file from before the switch: straight steps
+        ramp = Ramp.from_dict(ramp)
         lams = f["lambda"][()]
         pos = f["positions"][()]
         initial = f["initial"][()]

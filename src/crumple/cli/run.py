@@ -21,6 +21,7 @@ What it guarantees:
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import os
@@ -46,7 +47,10 @@ _WIRE_KEYS = {
     "hard_core_energy": "hard_core_energy",
     "rest_angle_sd": "rest_angle_sd",
 }
-_RAMP_KEYS = ("initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step")
+_RAMP_KEYS = (
+    "initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step",
+    "curved_steps",
+)  # fmt: skip
 _RUN_KEYS = ("replicas", "seed", "workers", "out", "figure_lambdas", "overwrite")
 #: The tables of a run's TOML file ([protocol]: kind = "ramp" | "injection", and the
 #: injection's parameters).
@@ -581,6 +585,12 @@ def register(sub) -> None:
     for flag, kind, text in _FLAGS:
         p.add_argument(flag, type=kind, help=text)
     p.add_argument("--method", choices=["newton", "powell"], help="minimiser (default newton)")
+    p.add_argument(
+        "--curved-steps",
+        action=argparse.BooleanOptionalAction,
+        help="Newton: also try curved trial points where no contact acts "
+        "(default: crumple.relax.CURVED_STEPS)",
+    )
     p.add_argument(
         "--overwrite",
         action="store_true",

@@ -112,7 +112,10 @@ def run_id(wire: Wire, ramp: Ramp, replica: int, seed: int) -> str:
 #: stored results. Enter a parameter here only if that is exactly true; otherwise let the ids
 #: change (the pinned ids in tests/test_sweep.py then fail, on purpose).
 ID_NEUTRAL = MappingProxyType(
-    {"wire": {"rest_angle_sd": 0.0, "cavity_radius": None}, "ramp": {"powell_rtol": None}}
+    {
+        "wire": {"rest_angle_sd": 0.0, "cavity_radius": None},
+        "ramp": {"powell_rtol": None, "curved_steps": False},
+    }
 )
 
 
