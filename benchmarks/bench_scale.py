@@ -1,15 +1,16 @@
 """The engine at scale (issue 9): counts and CPU time against N, and against the landed engine.
 
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
-    python benchmarks/bench_scale.py smooth          # geomspace(1, 30, 12), N = 100 … 10⁴
+    python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
     python benchmarks/bench_scale.py scale 100 1000  # default schedule: the scaling table
+    python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
     python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
     python benchmarks/bench_scale.py compare         # stage energies, new vs landed
     python benchmarks/bench_scale.py contacts [N …]  # contact stages: springs on vs off
     python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
     python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
-    python benchmarks/bench_scale.py curved [N …] [seeds=0,1]  # default ramps, CURVED_STEPS off/on
+    python benchmarks/bench_scale.py curved [N …] [seeds=0,1]  # default ramps, curved steps off/on
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -84,16 +85,77 @@ def bench_ramp100(repeat: int = 3):
     print(f"  speed-up (CPU, median of {repeat}): {to / tn:.2f}x")
 
 
-def bench_smooth():
-    print("== smooth stages: geomspace(1, 30, 12), continuum B = 0.05, S = 5000, seed 0 ==")
-    ramp = Ramp(lambdas=tuple(np.geomspace(1.0, 30.0, 12)))
-    for n in (100, 1000, 2000, 10_000):
-        r, t = cpu(lambda n=n: run_ramp(continuum_wire(n), ramp, seed=0))
+def bench_smooth(ns=(100, 1000, 2000, 10_000), curved=None):
+    """The acceptance's smooth stages: iterations per stage and the buckling stage at each N.
+    ``curved``: the ramp's ``curved_steps`` (None: the default)."""
+    ramp = Ramp(lambdas=tuple(np.geomspace(1.0, 30.0, 12)), curved_steps=curved)
+    print("== smooth stages: geomspace(1, 30, 12), continuum B = 0.05, S = 5000, seed 0, "
+          f"curved steps {'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
+    for n in ns:
+        progress = _stage_line(n) if n >= 10_000 else None
+        r, t = cpu(lambda n=n, p=progress: run_ramp(continuum_wire(n), ramp, seed=0, progress=p))
         its = [s.result.iterations for s in r.stages]
-        bent = [s.energy.bending > 1e-3 for s in r.stages].index(True)
-        print(f"  N = {n:6d}: {sum(its):4d} iterations {its}, buckled at stage {bent} "
-              f"(λ = {ramp.lambdas[bent]:.3g}), {t:.2f} s CPU, "
-              f"converged {r.converged}")  # fmt: skip
+        bent = next((i for i, s in enumerate(r.stages) if s.energy.bending > 1e-3), None)
+        where = "never" if bent is None else f"at stage {bent} (λ = {ramp.lambdas[bent]:.3g})"
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+        print(f"  N = {n:6d}: {sum(its):4d} iterations {its}, buckled {where}, {t:.2f} s CPU, "
+              f"max RSS {rss:.2f} GiB, converged {sum(s.result.converged for s in r.stages)}/"
+              f"{len(r.stages)}", flush=True)  # fmt: skip
+        for s in r.stages:
+            if not s.result.converged:
+                print(f"    λ = {s.lam:.4g}: {s.result.message}", flush=True)
+
+
+def _stage_line(n):
+    """A progress line per stage on stderr (large N: a stage can take minutes)."""
+    t0 = time.process_time()
+
+    def line(i, total, st):
+        res = st.result
+        print(f"    N = {n}, stage {i + 1}/{total}, λ = {st.lam:.4g}: {res.iterations} "
+              f"iterations, converged {res.converged}, max force {res.max_force:.2g}, "
+              f"bending {st.energy.bending:.3g}, {time.process_time() - t0:.0f} s CPU",
+              file=sys.stderr, flush=True)  # fmt: skip
+        if not res.converged:
+            print(f"      {res.message}", file=sys.stderr, flush=True)
+
+    return line
+
+
+def bench_decrease(ns=(10_000,), trap=0.0):
+    """The smooth ramp's stages, curved steps off and on: the decrease a Newton step predicts
+    at each accepted point against that of a round-off gradient (``minimize._newton_decrease``,
+    the force-resolution test of the fourth stop), and the energy. ``trap``: the trap's x."""
+    from types import SimpleNamespace
+
+    from crumple.linalg import LDLT
+    from crumple.minimize import _newton_decrease
+    from crumple.minimize_modes import _modes
+    from crumple.relax import STABILITY_TOL, _symmetry_modes, node_lengths
+
+    ramp = tuple(np.geomspace(1.0, 30.0, 12))
+    print(f"== smooth stages geomspace(1, 30, 12), trap at x = {trap:g}: Newton's predicted "
+          "decrease at each accepted point, and that of round-off alone ==")  # fmt: skip
+    for n in ns:
+        wire = Wire.from_continuum(**CONTINUUM, n_segments=n, hard_core=hard_core_for(n),
+                                   trap_center=(trap, 0.0))  # fmt: skip
+        m = np.repeat(node_lengths(wire), 2)
+        for on in (False, True):
+            r = run_ramp(wire, Ramp(lambdas=ramp, curved_steps=on), seed=0)
+            for s in r.stages:
+                energy = WireEnergy(wire, s.lam)
+                e, g = energy(s.positions)
+                h = energy.hessian_csc(s.positions)
+                f = LDLT().factorize(h, shift=STABILITY_TOL * m)
+                zero = lambda x, w=wire, lam=s.lam: _symmetry_modes(x, w, lam)  # noqa: E731
+                modes = _modes(zero, s.positions, m)
+                st = SimpleNamespace(x=s.positions, g=g, mask=None)
+                dec, noise = _newton_decrease(st, h, f, modes)
+                print(f"  N = {n} curved {'on ' if on else 'off'} λ = {s.lam:7.3f}: "
+                      f"{s.result.iterations:4d} its, E = {e:.8f}, max force "
+                      f"{s.result.max_force:.1e} (floor {s.result.force_resolution:.1e}), "
+                      f"decrease {dec:.2e} = {dec / noise:.1e} × a one-ulp move's",
+                      flush=True)  # fmt: skip
 
 
 def bench_scale(ns):
@@ -104,7 +166,8 @@ def bench_scale(ns):
     )
     for n in ns:
         wire = continuum_wire(n)
-        r, t = cpu(lambda wire=wire: run_ramp(wire, seed=0))
+        progress = _stage_line(n) if n >= 10_000 else None
+        r, t = cpu(lambda wire=wire, p=progress: run_ramp(wire, seed=0, progress=p))
         smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
         contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
         its = sum(s.result.iterations for s in r.stages)
@@ -318,15 +381,13 @@ def _accurate_ramps(ns, modes, relax):
 
 
 def bench_curved(ns=(), seeds=(0, 1, 2, 3), big_seeds=(0,)):
-    """Curved trial points (``relax.CURVED_STEPS``) off and on, default ramp, same process:
+    """Curved trial points (``Ramp.curved_steps``) off and on, default ramp, same process:
     the paper's wire (N = 100, per length and per node) over ``seeds``, the plastic per-node
     wire of the reproduction at three (s, θ_p) over seeds 0–1, then the continuum wire at
     each N of ``ns`` over ``big_seeds``. Per ramp: iterations, evaluations, curved steps
     taken, stages converged, CPU, the final energy (which branch the ramp ended on)."""
-    from crumple import relax
     from crumple.model import Plasticity
 
-    default = relax.CURVED_STEPS
     cases = [
         ("N = 100 per length", Wire(k_b=5, k_s=5e5), seeds),
         ("N = 100 per node", Wire(k_b=5, k_s=5e5, confinement="per-node"), seeds),
@@ -336,21 +397,18 @@ def bench_curved(ns=(), seeds=(0, 1, 2, 3), big_seeds=(0,)):
         cases.append((f"N = 100 per node, plastic s = {s_}, θ_p = {tp}", wire, (0, 1)))
     cases += [(f"N = {n} continuum", continuum_wire(n), big_seeds) for n in ns]  # fmt: skip
     run_ramp(Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
-    try:
-        with threadpool_limits(limits=1, user_api="blas"):
-            for label, wire, ss in cases:
-                print(f"== {label}, default schedule, seeds {list(ss)}: curved steps off / on ==")
-                for mode in (False, True):
-                    relax.CURVED_STEPS = mode
-                    _curved_ramps(wire, ss, "on " if mode else "off")
-    finally:
-        relax.CURVED_STEPS = default
+    with threadpool_limits(limits=1, user_api="blas"):
+        for label, wire, ss in cases:
+            print(f"== {label}, default schedule, seeds {list(ss)}: curved steps off / on ==")
+            for mode in (False, True):
+                _curved_ramps(wire, ss, mode)
 
 
-def _curved_ramps(wire, seeds, mode):
+def _curved_ramps(wire, seeds, on):
     tot_its = tot_t = 0.0
+    mode = "on " if on else "off"
     for seed in seeds:
-        r, t = cpu(lambda seed=seed: run_ramp(wire, seed=seed))
+        r, t = cpu(lambda seed=seed: run_ramp(wire, Ramp(curved_steps=on), seed=seed))
         res = [s.result for s in r.stages]
         its = sum(x.iterations for x in res)
         tot_its += its
@@ -366,10 +424,16 @@ if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
         bench_ramp100()
-    elif what == "smooth":
-        bench_smooth()
+    elif what == "smooth":  # smooth [N …] [curved=on|off]
+        flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
+        ns = [int(v) for v in sys.argv[2:] if "=" not in v] or (100, 1000, 2000, 10_000)
+        bench_smooth(ns, {"on": True, "off": False}.get(flags.get("curved")))
     elif what == "scale":
         bench_scale([int(v) for v in sys.argv[2:]] or [100, 1000])
+    elif what == "decrease":  # decrease [N …] [trap=X]
+        flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
+        ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
+        bench_decrease(ns, float(flags.get("trap", 0.0)))
     elif what == "lbfgs":
         bench_lbfgs()
     elif what == "cold":

@@ -23,6 +23,7 @@ from scipy.optimize import rosen, rosen_der, rosen_hess
 
 from crumple.minimize import (
     MinimizeResult,
+    _force_resolution,
     max_force,
     newton,
     powell,
@@ -1026,3 +1027,65 @@ def test_a_retraction_that_offers_no_point_leaves_newton_bit_for_bit_unchanged()
     ref = newton(fun, x0, hess=hess, maxiter=500)
     assert np.array_equal(r.x, ref.x) and r.iterations == ref.iterations
     assert r.evaluations == ref.evaluations and r.curved_steps == 0
+
+
+def _coherent_below_resolution(power, n=400, stiff=1e6, soft=1e-3):
+    """A chain of n rows at ~10⁶ (ulp 1.2·10⁻¹⁰): stiff springs (K = 10⁶) between neighbours,
+    so that a row's force resolution is ~5·10⁻³, and a soft term (k/power) Σ (x_i - c_i)^power
+    whose minimum is a uniform shift of 1 away: a force of 10⁻³ on every row, below the
+    resolution, yet coherent, the energy k n / power above the minimum."""
+    c = 1e6 + np.arange(n, dtype=np.float64) + 1.0
+
+    def fun(x):
+        s, t = np.diff(x) - 1.0, x - c
+        e = 0.5 * stiff * float(s @ s) + soft / power * float(np.sum(t**power))
+        g = soft * t ** (power - 1)
+        g[:-1] -= stiff * s
+        g[1:] += stiff * s
+        return e, g
+
+    def hess(x):
+        d = soft * (power - 1) * (x - c) ** (power - 2) + 2.0 * stiff
+        d[[0, -1]] -= stiff
+        off = np.full(n - 1, -stiff)
+        return sp.diags([off, d, off], [-1, 0, 1], format="csc")
+
+    return fun, hess, c - 1.0
+
+
+def test_forces_below_their_resolution_but_coherent_are_not_a_minimum():
+    """The force resolution accepts a point only if a Newton step from it predicts a decrease
+    within 100 times that of a one-ulp move of the coordinates: a soft quartic on a stiff chain
+    at x ~ 10⁶, after one Newton step (a third of the way), has every force below its
+    resolution and the energy 0.05 above the minimum (measured at N = 10⁴ on the continuum
+    wire: a stage so accepted sat 0.0039 above its minimum)."""
+    fun, hess, x0 = _coherent_below_resolution(4, n=1000)
+    assert 1e-6 < max_force(fun(x0)[1]) < 0.25 * _force_resolution(hess(x0), x0)
+    r = newton(fun, x0, hess=hess, maxiter=1)
+    assert not r.converged and "not a minimum" in r.message
+    assert r.max_force <= r.force_resolution  # what the force test alone accepted
+    r = newton(fun, x0, hess=hess, maxiter=200)  # on to ftol
+    assert r.converged and r.max_force <= 1e-6 and r.energy < 1e-3 * fun(x0)[0]
+
+
+def test_newton_decrease_is_taken_in_the_complement_of_the_zero_modes():
+    """A = H + τM may have a negative pivot along a zero mode W while it is positive definite
+    in W's complement (the inertia test counts there): the predicted decrease is that of the
+    complement, ½ vᵀ[A⁻¹ - A⁻¹W(WᵀA⁻¹W)⁻¹WᵀA⁻¹]v (the limit of (A + βWWᵀ)⁻¹), the decrease
+    of the quadratic model over the steps s with Wᵀs = 0; never negative."""
+    from types import SimpleNamespace
+
+    from crumple.linalg import LDLT
+    from crumple.minimize import _newton_decrease
+    from crumple.minimize_modes import _negative_count
+
+    a = np.array([[-1.0, 0.2, 0.0], [0.2, 2.0, 0.1], [0.0, 0.1, 3.0]])  # negative along e_0
+    w = np.array([[1.0], [0.0], [0.0]])
+    f = LDLT().factorize(sp.csc_matrix(a))
+    assert f.negative == 1 and _negative_count(f, w) == 0
+    g = np.array([0.0, 1e-3, -2e-3])
+    st = SimpleNamespace(g=g, x=np.array([0.5, 0.5, 0.5]), mask=None)
+    dec, noise = _newton_decrease(st, sp.csc_matrix(a), f, w)
+    want = 0.5 * float(g[1:] @ np.linalg.solve(a[1:, 1:], g[1:]))  # the steps with s_0 = 0
+    assert dec > 0 and noise >= 0
+    np.testing.assert_allclose(dec, want, rtol=1e-12)

@@ -222,26 +222,29 @@ def newton(
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
     while True:
-        if st.fmax <= max(ftol, st.fres):
+        if st.fmax <= max(ftol, st.fres) and not st.refine:
             h = hess(st.x)
             st.nhev += 1
             st.fres = _force_resolution(h, st.x)
-        if st.fmax <= max(ftol, st.fres):
+        if st.fmax <= max(ftol, st.fres) and not st.refine:
             stop = _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes,
                                 step_limit, feasible)  # fmt: skip
             if stop is not None:
                 message = stop
                 break
-            if callback is not None:
+            if callback is not None and not st.refine:
                 callback(st.it, st.x, st.e, st.fmax)
             continue
         if st.it >= maxiter:
+            if st.refine:
+                message += f" (the last point {st.refine_note})"
             break
         failure = _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_limit,
                                feasible, armijo, max_backtracks, max_step, retract)  # fmt: skip
         if failure:
-            message = failure
+            message = failure + (f" (the point returned {st.refine_note})" if st.refine else "")
             break
+        st.refine = False
         if callback is not None:
             callback(st.it, st.x, st.e, st.fmax)
     return _result(st, ldl, ftol, message)
@@ -254,7 +257,22 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     check = ldl.factorize(h, shift=floor)
     modes = _modes(zero_modes, st.x, m)
     if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
-        return _converged(st, ftol)
+        if st.fmax <= ftol:
+            return _converged(st, ftol)
+        decrease, noise = _newton_decrease(st, h, check, modes)
+        bound = max(resolution(st.e), RESOLUTION_FACTOR**2 * noise)
+        if not decrease <= bound:  # forces below their resolution, but coherent
+            st.refine = True
+            st.refine_note = (
+                f"had max force {st.fmax:.3g} <= its resolution {st.fres:.3g}, but a Newton "
+                f"step predicted a decrease of {decrease:.3g}, above {bound:.3g} "
+                f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move): not a minimum"
+            )
+            return None
+        return _converged(st, ftol) + (
+            f"; a Newton step predicts a decrease of {decrease:.3g} <= {bound:.3g} "
+            f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move)"
+        )
     stable, mode = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
     if stable is not None:
         return _converged(st, ftol) + stable
@@ -266,6 +284,45 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1
     return None
+
+
+def _newton_decrease(st, h, f, modes) -> tuple[float, float]:
+    """(the decrease a Newton step from ``st.x`` predicts, the same for round-off alone).
+
+    ½ vᵀA⁻¹v in the complement of the zero modes W, A = H + τM factored as ``f``: by the limit
+    of (A + βWWᵀ)⁻¹, ½ [vᵀy - (Wᵀy)ᵀ(WᵀA⁻¹W)⁻¹(Wᵀy)] with y = A⁻¹v, the complement the
+    inertia test counts in (A itself can have a negative pivot along W there). v = g for the
+    first; for the second, v = H δ with δ_j = ±ulp(x_j), random signs (the mean of two draws,
+    fixed seed), the force change of a one-ulp move of the coordinates: the model of the force
+    resolution itself, so that its decrease, about ½ δᵀHδ, is that of moving to the nearest
+    representable point. Fixed rows (``st.mask``) do not move: δ = 0 there.
+
+    They tell a point where the forces are below their floating-point resolution because they
+    are noise from one where they are small but coherent. Measured on the continuum wire
+    (B = 0.05, S = 5000) with `Ramp(lambdas=geomspace(1, 30, 12))`, before this test: with
+    curved steps at N = 10⁴ two stages were accepted after one step, predicting 8·10⁻³ and
+    9·10⁻³, their energies 0.0039 and 0.0082 above the minimum, while the true minima of the
+    ramp predicted 10⁻²² … 2·10⁻¹²; docs/performance.md, "True minima below the force
+    resolution"."""
+    g = np.asarray(st.g, dtype=np.float64).ravel()
+    u = np.spacing(np.abs(np.asarray(st.x, dtype=np.float64))).ravel()
+    if st.mask is not None:
+        u[st.mask] = 0.0
+    rng = np.random.default_rng(0)
+    vs = [g] + [np.asarray(h @ (u * rng.choice((-1.0, 1.0), size=u.size))).ravel()
+                for _ in range(2)]  # fmt: skip
+    if modes is not None:
+        aw = np.column_stack([f.solve(w) for w in modes.T])
+        waw = modes.T @ aw
+    out = []
+    for v in vs:
+        y = f.solve(v)
+        d = float(v @ y)
+        if modes is not None:
+            wy = modes.T @ y
+            d -= float(wy @ np.linalg.lstsq(0.5 * (waw + waw.T), wy, rcond=None)[0])
+        out.append(0.5 * d)
+    return out[0], 0.5 * (out[1] + out[2])
 
 
 def _converged(st, ftol) -> str:
@@ -306,7 +363,7 @@ def _result(st, ldl, ftol, message) -> MinimizeResult:
         iterations=st.it,
         evaluations=st.nfev,
         hessian_evaluations=st.nhev,
-        converged=st.fmax <= max(ftol, st.fres) and not st.unstable,
+        converged=st.fmax <= max(ftol, st.fres) and not st.unstable and not st.refine,
         ftol=ftol,
         message=message,
         method="newton",
@@ -391,6 +448,8 @@ class _State:
     exact: bool = True  # the last direction is the exact Hessian's Newton step
     escapes: int = 0  # saddle escapes taken
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
+    refine: bool = False  # forces below their resolution but a Newton step still pays: go on
+    refine_note: str = ""
     curved: int = 0  # accepted steps that were the retracted (curved) point
 
 

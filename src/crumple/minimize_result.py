@@ -34,7 +34,11 @@ class MinimizeResult:
     force_resolution : float
         Newton: the force change a one-ulp move of the coordinates can make (times 10): the
         floor below which forces are round-off. ``converged`` means
-        ``max_force <= max(ftol, force_resolution)``; the message says which held.
+        ``max_force <= max(ftol, force_resolution)``, and, where only the floor holds, that a
+        Newton step predicts a decrease within 10² times that of a one-ulp move of the
+        coordinates, or within the energy's resolution 16 ε|E| (coherent forces below the
+        floor are not a minimum; not tested where the element-form product decides
+        stability); the message says which held.
     curved_steps : int
         Newton with a ``retract``: the accepted steps that were the curved point, not the
         straight one.
