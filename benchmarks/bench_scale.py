@@ -124,13 +124,14 @@ def _stage_line(n):
 
 def bench_decrease(ns=(10_000,), trap=0.0):
     """The smooth ramp's stages, curved steps off and on: the decrease a Newton step predicts
-    at each accepted point against that of a round-off gradient (``minimize._newton_decrease``,
-    the force-resolution test of the fourth stop), and the energy. ``trap``: the trap's x."""
+    at each accepted point against that of a one-ulp move
+    (``minimize_resolution._newton_decrease``, the force-resolution test of the fourth stop),
+    and the energy. ``trap``: the trap's x."""
     from types import SimpleNamespace
 
     from crumple.linalg import LDLT
-    from crumple.minimize import _newton_decrease
     from crumple.minimize_modes import _modes
+    from crumple.minimize_resolution import _newton_decrease
     from crumple.relax import STABILITY_TOL, _symmetry_modes, node_lengths
 
     ramp = tuple(np.geomspace(1.0, 30.0, 12))

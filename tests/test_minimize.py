@@ -1076,8 +1076,8 @@ def test_newton_decrease_is_taken_in_the_complement_of_the_zero_modes():
     from types import SimpleNamespace
 
     from crumple.linalg import LDLT
-    from crumple.minimize import _newton_decrease
     from crumple.minimize_modes import _negative_count
+    from crumple.minimize_resolution import _newton_decrease
 
     a = np.array([[-1.0, 0.2, 0.0], [0.2, 2.0, 0.1], [0.0, 0.1, 3.0]])  # negative along e_0
     w = np.array([[1.0], [0.0], [0.0]])

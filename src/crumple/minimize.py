@@ -35,12 +35,12 @@ from .linalg_springs import new_rows, spring_step
 from .minimize_accurate import _accurate_check, _constrained_action, _recheck
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
+from .minimize_resolution import _force_resolution, _resolved
 from .minimize_result import MinimizeResult, _validate_common, max_force
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
 
-RESOLUTION_FACTOR = 10.0
 SKIP_MAX = 8
 #: How many times :func:`_barrier_step` lists the barriers: for the Newton step, then for each
 #: step found, while that adds springs.
@@ -259,20 +259,11 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
         if st.fmax <= ftol:
             return _converged(st, ftol)
-        decrease, noise = _newton_decrease(st, h, check, modes)
-        bound = max(resolution(st.e), RESOLUTION_FACTOR**2 * noise)
-        if not decrease <= bound:  # forces below their resolution, but coherent
-            st.refine = True
-            st.refine_note = (
-                f"had max force {st.fmax:.3g} <= its resolution {st.fres:.3g}, but a Newton "
-                f"step predicted a decrease of {decrease:.3g}, above {bound:.3g} "
-                f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move): not a minimum"
-            )
+        resolved, note = _resolved(st, h, check, modes)
+        if not resolved:  # forces below their resolution, but coherent: go on
+            st.refine, st.refine_note = True, note
             return None
-        return _converged(st, ftol) + (
-            f"; a Newton step predicts a decrease of {decrease:.3g} <= {bound:.3g} "
-            f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move)"
-        )
+        return _converged(st, ftol) + note
     stable, mode = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
     if stable is not None:
         return _converged(st, ftol) + stable
@@ -284,45 +275,6 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1
     return None
-
-
-def _newton_decrease(st, h, f, modes) -> tuple[float, float]:
-    """(the decrease a Newton step from ``st.x`` predicts, the same for round-off alone).
-
-    ½ vᵀA⁻¹v in the complement of the zero modes W, A = H + τM factored as ``f``: by the limit
-    of (A + βWWᵀ)⁻¹, ½ [vᵀy - (Wᵀy)ᵀ(WᵀA⁻¹W)⁻¹(Wᵀy)] with y = A⁻¹v, the complement the
-    inertia test counts in (A itself can have a negative pivot along W there). v = g for the
-    first; for the second, v = H δ with δ_j = ±ulp(x_j), random signs (the mean of two draws,
-    fixed seed), the force change of a one-ulp move of the coordinates: the model of the force
-    resolution itself, so that its decrease, about ½ δᵀHδ, is that of moving to the nearest
-    representable point. Fixed rows (``st.mask``) do not move: δ = 0 there.
-
-    They tell a point where the forces are below their floating-point resolution because they
-    are noise from one where they are small but coherent. Measured on the continuum wire
-    (B = 0.05, S = 5000) with `Ramp(lambdas=geomspace(1, 30, 12))`, before this test: with
-    curved steps at N = 10⁴ two stages were accepted after one step, predicting 8·10⁻³ and
-    9·10⁻³, their energies 0.0039 and 0.0082 above the minimum, while the true minima of the
-    ramp predicted 10⁻²² … 2·10⁻¹²; docs/performance.md, "True minima below the force
-    resolution"."""
-    g = np.asarray(st.g, dtype=np.float64).ravel()
-    u = np.spacing(np.abs(np.asarray(st.x, dtype=np.float64))).ravel()
-    if st.mask is not None:
-        u[st.mask] = 0.0
-    rng = np.random.default_rng(0)
-    vs = [g] + [np.asarray(h @ (u * rng.choice((-1.0, 1.0), size=u.size))).ravel()
-                for _ in range(2)]  # fmt: skip
-    if modes is not None:
-        aw = np.column_stack([f.solve(w) for w in modes.T])
-        waw = modes.T @ aw
-    out = []
-    for v in vs:
-        y = f.solve(v)
-        d = float(v @ y)
-        if modes is not None:
-            wy = modes.T @ y
-            d -= float(wy @ np.linalg.lstsq(0.5 * (waw + waw.T), wy, rcond=None)[0])
-        out.append(0.5 * d)
-    return out[0], 0.5 * (out[1] + out[2])
 
 
 def _converged(st, ftol) -> str:
@@ -576,24 +528,6 @@ def _merged_rows(rows, more):
     if not new.any():
         return rows, False
     return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
-
-
-def _force_resolution(h, x) -> float:
-    """``RESOLUTION_FACTOR`` × max_i Σ_j |H_ij| ulp(x_j): how much the force on a row can change
-    when the coordinates move by one unit in the last place. Below it the force is noise: a
-    stiff wire of 10⁴ nodes at |x| ~ 0.5 cannot be brought below ~2e-5 (measured, B = 0.05)."""
-    u = np.spacing(np.abs(x)).ravel()
-    if isinstance(h, CSC):
-        return RESOLUTION_FACTOR * h.abs_row_max(u) if h.nnz else 0.0
-    if sp.issparse(h) and h.format == "csc" and h.shape[0] == h.shape[1] and h.nnz:
-        # column sums of |H| u[row], = row sums by symmetry: no new sparse matrix
-        r = np.bincount(
-            np.repeat(np.arange(h.shape[1]), np.diff(h.indptr)),
-            weights=np.abs(h.data) * u[h.indices], minlength=h.shape[1],
-        )  # fmt: skip
-    else:
-        r = (abs(h) if sp.issparse(h) else np.abs(np.asarray(h))) @ u
-    return RESOLUTION_FACTOR * float(np.max(r)) if r.size else 0.0
 
 
 def _metric(metric, x) -> np.ndarray:

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
+from .signals import Terminated, _on_sigterm, signal_cause
 
 __all__ = ["cmd_run", "register"]
 
@@ -70,26 +71,6 @@ _UNITS = {
     "stage_noise": "[segment lengths]",
     "max_step": "[segment lengths]",
 }
-
-
-class Terminated(BaseException):
-    """SIGTERM, raised in the main thread so that workers are stopped on the way out."""
-
-
-def signal_cause(exc: BaseException) -> BaseException | None:
-    """The KeyboardInterrupt or :class:`Terminated` behind ``exc``, if a signal caused it.
-
-    A signal that lands while Numba runs a Python callback of a compiled function (it unpickles
-    constants there) comes out as a ``SystemError`` whose cause is the KeyboardInterrupt; it is
-    still the user's Ctrl-C, and must end the run the same way (seen in a fresh-clone CI run:
-    the replicas were lost and the exit status was 1)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, (KeyboardInterrupt, Terminated)):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
 
 
 def build_wire(args, cfg: dict, defaults: dict | None = None):
@@ -435,10 +416,6 @@ def publish(out: Path, results, *, seed, fig, attrs=None, tag: str = "") -> tupl
 
 def _warn(msg: str) -> None:
     print(f"crumple: warning: {msg}", file=sys.stderr)
-
-
-def _on_sigterm(signum, frame):
-    raise Terminated
 
 
 def cmd_run(args) -> int:
