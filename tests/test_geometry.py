@@ -29,6 +29,7 @@ from crumple.geometry import (
     segment_lengths,
     turning_angles,
 )
+from crumple.geometry.crossings import _crossing_candidates
 
 # --------------------------------------------------------------------------------------------
 # Exact references
@@ -287,6 +288,42 @@ def test_exact_against_rational_reference_near_degenerate():
 grid_chains = st.lists(
     st.tuples(st.integers(0, 4), st.integers(0, 4)), min_size=3, max_size=12
 ).filter(lambda pts: all(p != q for p, q in itertools.pairwise(pts)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    x0=st.floats(-2, 2), y0=st.floats(-2, 2), angle=st.floats(0, 2 * math.pi),
+    length=st.floats(1e-6, 1.0), back=st.booleans(), wiggle=st.sampled_from([0.0, 1e-17, 1e-15]),
+)  # fmt: skip
+def test_nearly_straight_and_nearly_folded_adjacent_segments_are_exact(
+    x0, y0, angle, length, back, wiggle
+):
+    """Three nodes on a line, up to rounding (a straight wire, or one folded back onto
+    itself), where the float orientation cannot be certified: the compiled pass decides the
+    pairs that certainly point the same way, the rest are decided exactly, and both agree
+    with exact rational arithmetic."""
+    c, s = math.cos(angle), math.sin(angle)
+    t = -0.5 if back else 1.7
+    third = [x0 + t * length * c - wiggle * s, y0 + t * length * s + wiggle * c]
+    pos = np.array([[x0, y0], [x0 + length * c, y0 + length * s], third])
+    got = [tuple(h) for h in find_crossings(pos).tolist()]
+    assert got == ref_crossings(pos)
+    assert has_crossings(pos) == bool(got)
+    if not back:  # pointing the same way: certain in floating point, never a fold-back
+        _, unsure = _crossing_candidates(pos, False)
+        assert unsure.shape[0] == 0 and got == []
+
+
+def test_a_straight_wire_is_decided_without_exact_arithmetic():
+    """Collinear nodes at a slope that rounds: every orientation is uncertain, yet no pair
+    needs the exact (Python) test, because adjacent segments that certainly point the same way
+    cannot fold back (the minimiser checks such wires at every trial point)."""
+    pos = np.c_[np.linspace(0, 1, 101), np.linspace(0, 1, 101) / 3]
+    hits, unsure = _crossing_candidates(pos, False)
+    assert hits.shape[0] == 0 and unsure.shape[0] == 0
+    assert not has_crossings(pos)
+    folded = np.array([pos[0], pos[50], pos[10]])  # the same line, folded back
+    assert has_crossings(folded) == bool(ref_crossings(folded))
 
 
 @settings(max_examples=300, deadline=None)

@@ -86,13 +86,18 @@ def _intersect(pos, i, j):
 def _fold_back(pos, i):
     """(overlap, certain) for adjacent segments i, i + 1 folded exactly onto each other."""
     o, c = _orient(pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1], pos[i + 2, 0], pos[i + 2, 1])
-    if not c:
-        return False, False
-    if o != 0:
+    if c and o != 0:
         return False, True
     ux, uy = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
     vx, vy = pos[i + 2, 0] - pos[i + 1, 0], pos[i + 2, 1] - pos[i + 1, 1]
     dot = ux * vx + uy * vy
+    if not c:
+        # collinear or not, the segments cannot fold back where they certainly point the same
+        # way: the exact dot product of the exact differences is then positive (rounded
+        # differences, products and sum: an error below 4 eps (|ux vx| + |uy vy|); 8 here, and
+        # away from underflow). A nearly straight wire is decided here, not exactly in Python.
+        mag = abs(ux * vx) + abs(uy * vy)
+        return False, mag > 1e-280 and dot > 8.0 * _EPS * mag
     if dot < 0.0:
         return True, abs(dot) > 4.0 * _EPS * (abs(ux * vx) + abs(uy * vy))
     return False, dot > 4.0 * _EPS * (abs(ux * vx) + abs(uy * vy))
