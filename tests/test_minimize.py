@@ -640,6 +640,31 @@ def test_the_gauge_is_fixed_where_the_mode_is_largest_now():
     assert _gauge_pin(h, np.zeros((0, 6))) is None
 
 
+def test_the_gauge_of_one_mode_is_the_same_on_raw_csc_arrays():
+    """The compiled one-mode path (a :class:`CSC` Hessian, the minimiser's hot path) gives the
+    shift of the general one to the bit, a diagonal entry missing from the pattern included,
+    and no shift for a mode that vanishes."""
+    from crumple.linalg import CSC
+    from crumple.minimize_modes import _gauge_pin
+
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal((7, 7))
+    a = sp.csc_matrix(a + a.T)
+    a[3, 3] = 0.0
+    a.eliminate_zeros()
+    a.sort_indices()
+    raw = CSC(a.data, a.indices, a.indptr)
+    for k in range(6):
+        w = rng.standard_normal(7)
+        if k == 0:
+            w = np.zeros(7)
+            w[3] = 1.0  # the largest entry where H stores no diagonal
+        general, fast = _gauge_pin(a, w[None]), _gauge_pin(raw, w[None])
+        assert general.tobytes() == fast.tobytes()
+        assert raw.diagonal_entry(k) == a[k, k]
+    assert _gauge_pin(raw, np.zeros((1, 7))) is None
+
+
 # --------------------------------------------------------------------------------------------
 # Newton: stability where the assembled Hessian cannot resolve it (hess_action)
 # --------------------------------------------------------------------------------------------
@@ -1089,3 +1114,20 @@ def test_newton_decrease_is_taken_in_the_complement_of_the_zero_modes():
     want = 0.5 * float(g[1:] @ np.linalg.solve(a[1:, 1:], g[1:]))  # the steps with s_0 = 0
     assert dec > 0 and noise >= 0
     np.testing.assert_allclose(dec, want, rtol=1e-12)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    values=st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=0, max_size=40),
+    two_d=st.booleans(), strided=st.booleans(),
+)  # fmt: skip
+def test_all_finite_is_numpys_isfinite_all(values, two_d, strided):
+    from crumple.minimize_result import all_finite
+
+    a = np.array(values, dtype=np.float64)
+    if two_d and a.size % 2 == 0:
+        a = a.reshape(-1, 2)
+    if strided:
+        a = a[::2]
+    assert all_finite(a) == bool(np.isfinite(a).all())
+    assert all_finite(a.tolist()) == bool(np.isfinite(a).all())

@@ -178,6 +178,15 @@ def _csc_matvec(indptr, indices, data, v):
 
 
 @njit(cache=True)
+def _diagonal_entry(indptr, indices, data, j):
+    """A_jj of a CSC matrix whose rows are sorted within each column (0 if not stored)."""
+    for p in range(indptr[j], indptr[j + 1]):
+        if indices[p] >= j:
+            return data[p] if indices[p] == j else 0.0
+    return 0.0
+
+
+@njit(cache=True)
 def _abs_weighted_row_max(indptr, indices, data, u):
     """max_i Σ_j |A_ij| u_j of a symmetric CSC matrix, as column sums Σ_i |A_ij| u_i (the
     same products added in the same order as ``np.bincount`` over the entries); 0 if empty,
@@ -262,6 +271,10 @@ class CSC:
     def abs_row_max(self, u) -> float:
         """max_i Σ_j |A_ij| u_j (A symmetric): the largest change of A u's rows by a move u."""
         return float(_abs_weighted_row_max(self.indptr, self.indices, self.data, u))
+
+    def diagonal_entry(self, j: int) -> float:
+        """A_jj (0 where the pattern does not store it)."""
+        return float(_diagonal_entry(self.indptr, self.indices, self.data, j))
 
 
 class _Symbolic:

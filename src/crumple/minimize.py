@@ -36,7 +36,7 @@ from .minimize_accurate import _accurate_check, _constrained_action, _recheck
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
-from .minimize_result import MinimizeResult, _validate_common, max_force
+from .minimize_result import MinimizeResult, _validate_common, all_finite, max_force
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
@@ -298,7 +298,7 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
         p = _barrier_step(st, p, barriers, ldl)
     if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
         p.reshape(-1)[st.mask] = 0.0
-    if not np.isfinite(p).all():
+    if not all_finite(p):
         return "could not make the Hessian positive definite (non-finite factor)"
     return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step,
                         retract)  # fmt: skip
@@ -512,7 +512,7 @@ def _spring_model_step(st, p, rows, ldl):
     if not ok:
         if st.model is None:
             return None
-        start = s if np.isfinite(s).all() else p.ravel()
+        start = s if all_finite(s) else p.ravel()
         s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, start)
     return s
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from . import minimize_expand
-from .minimize_result import max_force
+from .minimize_result import all_finite, max_force
 
 _EPS = float(np.finfo(float).eps)
 #: The trust radius shrinks to the accepted displacement after a backtrack, by this factor at
@@ -29,7 +29,7 @@ def _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_s
                  retract=None):  # fmt: skip
     """Cap, cut and backtrack the step ``p``; update ``st`` and its radius; None or why not."""
     slope = float(np.vdot(st.g, p))
-    if not (slope < 0 and np.isfinite(p).all()):
+    if not (slope < 0 and all_finite(p)):
         return "the Newton step is not a descent direction (numerical breakdown)"
     biggest = max_force(p)  # the largest row displacement
     alpha = 1.0

@@ -50,6 +50,14 @@ def _gauge_pin(h, modes) -> np.ndarray | None:
     """
     hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
     w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
+    if w.shape[0] == 1 and isinstance(hs, CSC):  # the rotation alone: the loop below, compiled
+        mode = w[0]
+        j = int(np.argmax(np.abs(mode)))
+        if not abs(mode[j]) > 0:
+            return None
+        pin = np.zeros(hs.shape[0])
+        pin[j] = max(abs(hs.diagonal_entry(j)), -2.0 * float(mode @ (hs @ mode)) / mode[j] ** 2)
+        return pin
     pairs = _gauge_entries(w)
     if not pairs:
         return None

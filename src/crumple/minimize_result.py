@@ -81,6 +81,26 @@ def max_force(grad) -> float:
 
 
 @njit(cache=True)
+def _all_finite(a):
+    """Whether every entry of a float array is finite (``np.isfinite(a).all()`` in one pass)."""
+    for v in a.ravel():
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+def all_finite(a) -> bool:
+    """``np.isfinite(a).all()`` for the minimisers' float64 arrays, in one compiled pass.
+
+    >>> all_finite(np.array([1.0, np.inf]))
+    False
+    """
+    if isinstance(a, np.ndarray) and a.dtype == np.float64:
+        return bool(_all_finite(a))
+    return bool(np.isfinite(a).all())
+
+
+@njit(cache=True)
 def _max_row_norm2(g):
     """sqrt(max_i (g_i0² + g_i1²)) of an (n, 2) array, NaN if any row is NaN, 0 if empty: what
     ``sqrt(max(einsum("ij,ij->i", g, g)))`` gives (row sums of two products, in that order;
