@@ -1093,6 +1093,32 @@ def test_forces_below_their_resolution_but_coherent_are_not_a_minimum():
     assert r.converged and r.max_force <= 1e-6 and r.energy < 1e-3 * fun(x0)[0]
 
 
+def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decrease():
+    """Where the assembled H cannot resolve τ and the accurate product decides stability (N ~
+    10⁵), a point accepted only below the force floor must still pass the decrease test: the
+    soft quartic of the chain above (every force below its resolution, yet coherent), in a
+    metric that puts the assembled resolution above τ, and an 'assembled' H wrong along the
+    uniform mode (a negative pivot that is round-off): the accurate product finds the point
+    stable, but a Newton step from it predicts a decrease far above a one-ulp move's."""
+    n, metric = 200, 1e-9
+    fun, hess, x0 = _coherent_below_resolution(4, n=n)
+
+    def action(x, v):  # the exact H v, by differences
+        return np.asarray(hess(x) @ v).ravel()
+
+    def assembled(x):
+        return sp.csc_matrix(hess(x).toarray() - 0.5 / n)  # -0.5 along the uniform mode
+
+    assert max_force(fun(x0)[1]) < 0.25 * _force_resolution(assembled(x0), x0)
+    kw = dict(hess=assembled, hess_action=action, metric=np.full(n, metric), curvature_tol=1e-3)
+    r = newton(fun, x0, maxiter=3, **kw)
+    assert not r.converged, r.message
+    assert "stable by the accurate Hessian product" not in r.message
+    assert "not a minimum" in r.message
+    assert r.max_force <= r.force_resolution  # what the force test and the product accepted
+    assert r.energy > 1e-3  # and rightly refused: the minimum is E = 0 at x = x0 + 1
+
+
 def test_newton_decrease_is_taken_in_the_complement_of_the_zero_modes():
     """A = H + τM may have a negative pivot along a zero mode W while it is positive definite
     in W's complement (the inertia test counts there): the predicted decrease is that of the

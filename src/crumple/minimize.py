@@ -257,16 +257,10 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     check = ldl.factorize(h, shift=floor)
     modes = _modes(zero_modes, st.x, m)
     if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
-        if st.fmax <= ftol:
-            return _converged(st, ftol)
-        resolved, note = _resolved(st, h, check, modes)
-        if not resolved:  # forces below their resolution, but coherent: go on
-            st.refine, st.refine_note = True, note
-            return None
-        return _converged(st, ftol) + note
-    stable, mode = _accurate_check(st, h, m, ldl, floor, modes, check)  # where H cannot tell
+        return _minimum(st, ftol, h, check, modes, "")
+    stable, mode, model = _accurate_check(st, h, m, ldl, floor, modes, check)  # H cannot tell
     if stable is not None:
-        return _converged(st, ftol) + stable
+        return _minimum(st, ftol, h, model, modes, stable)
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
@@ -275,6 +269,19 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1
     return None
+
+
+def _minimum(st, ftol, h, model, modes, stable) -> str | None:
+    """At a stable point: the converged message, or None (``st.refine`` set) where the forces
+    are only below their resolution and a Newton step in ``model`` (a positive definite factor
+    of H, up to τM or the assembled resolution) still predicts a decrease: go on."""
+    if st.fmax <= ftol:
+        return _converged(st, ftol) + stable
+    resolved, note = _resolved(st, h, model, modes)
+    if not resolved:  # forces below their resolution, but coherent
+        st.refine, st.refine_note = True, note
+        return None
+    return _converged(st, ftol) + stable + note
 
 
 def _converged(st, ftol) -> str:

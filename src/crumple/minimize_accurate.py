@@ -131,8 +131,9 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
     the assembled H is not): :func:`_lobpcg` preconditioned by the factor of the assembled
     H + σM (σ = ``PRECONDITIONER_SHIFT`` × its resolution, pivots floored), started from the
     factor's negative direction and two random vectors in the M-complement of the zero modes,
-    as ``minimize_modes._lowest_mode``. Returns (μ, converged, v, iterations): μ the lowest
-    Ritz value, converged whether it settled (:data:`ACCURATE_RTOL`)."""
+    as ``minimize_modes._lowest_mode``. Returns (μ, converged, v, iterations, factor): μ the
+    lowest Ritz value, converged whether it settled (:data:`ACCURATE_RTOL`), factor the
+    preconditioner's (positive definite)."""
     hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
     n = hs.shape[0]
     tau = float(floor[0] / m[0])
@@ -145,30 +146,34 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
     with np.errstate(all="ignore"):
         mu, x, settled = _lobpcg(action, m, np.column_stack(start), pre.solve, modes, tau, history)
     converged = settled and bool(np.isfinite(mu[0]))
-    return float(mu[0]), converged, x[:, 0], len(history)
+    return float(mu[0]), converged, x[:, 0], len(history), pre
 
 
 def _accurate_check(st, h, m, ldl, floor, modes, check):
-    """At an equilibrium whose inertia count found negative curvature: (suffix, mode). suffix
-    is the converged message's addition when ``st.hess_action`` shows the point stable where
-    the assembled H cannot resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None;
-    mode is (μ, v), the accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE` and
-    μ < -τ, else None."""
+    """At an equilibrium whose inertia count found negative curvature: (suffix, mode, model).
+    suffix is the converged message's addition when ``st.hess_action`` shows the point stable
+    where the assembled H cannot resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else
+    None; mode is (μ, v), the accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE`
+    and μ < -τ, else None; model, with a suffix, the factor of H + σM (positive definite, σ a
+    tenth of the assembled resolution) in which a point accepted below the force floor is
+    tested for the decrease a Newton step predicts (``minimize_resolution._resolved``: the
+    factor of H + τM has the round-off's negative pivots here)."""
     if st.hess_action is None:
-        return None, None
+        return None, None, None
     tau = float(floor[0] / m[0])
     res = _assembly_resolution(h, m)
     if not res > tau:
-        return None, None
-    mu, converged, v, its = _accurate_lowest(
+        return None, None, None
+    mu, converged, v, its, pre = _accurate_lowest(
         h, m, ldl, floor, modes, lambda v: st.hess_action(st.x, v), check
     )
     if mu >= -tau and converged:
-        return (
+        note = (
             f"; stable by the accurate Hessian product: lowest eigenvalue {mu:.6g} >= -{tau:.3g} "
             f"({its} LOBPCG iterations), below the assembled matrix's resolution {res:.3g}"
-        ), None
-    return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None)
+        )
+        return note, None, pre
+    return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None), None
 
 
 def _constrained_action(mask, hess_action):
