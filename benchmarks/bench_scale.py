@@ -2,7 +2,7 @@
 
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
     python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
-    python benchmarks/bench_scale.py scale 100 1000  # default schedule: the scaling table
+    python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off]  # the scaling table
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
     python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
@@ -159,8 +159,12 @@ def bench_decrease(ns=(10_000,), trap=0.0):
                       flush=True)  # fmt: skip
 
 
-def bench_scale(ns):
-    print("== default schedule (44 stages), continuum B = 0.05, S = 5000, seed 0 ==")
+def bench_scale(ns, seed=0, curved=None):
+    """The scaling table's rows: the default schedule at each N of ``ns`` (``curved``: the
+    ramp's ``curved_steps``, None: the default)."""
+    ramp = Ramp(curved_steps=curved)
+    print(f"== default schedule (44 stages), continuum B = 0.05, S = 5000, seed {seed}, curved "
+          f"steps {'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
     print(
         "  N | d | smooth its/stage | contact its/stage | ms CPU/iteration | factorisations/it "
         "| max RSS GiB | ramp CPU s | converged | contacts at the last stage"
@@ -168,7 +172,7 @@ def bench_scale(ns):
     for n in ns:
         wire = continuum_wire(n)
         progress = _stage_line(n) if n >= 10_000 else None
-        r, t = cpu(lambda wire=wire, p=progress: run_ramp(wire, seed=0, progress=p))
+        r, t = cpu(lambda wire=wire, p=progress: run_ramp(wire, ramp, seed=seed, progress=p))
         smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
         contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
         its = sum(s.result.iterations for s in r.stages)
@@ -429,8 +433,11 @@ if __name__ == "__main__":
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or (100, 1000, 2000, 10_000)
         bench_smooth(ns, {"on": True, "off": False}.get(flags.get("curved")))
-    elif what == "scale":
-        bench_scale([int(v) for v in sys.argv[2:]] or [100, 1000])
+    elif what == "scale":  # scale [N …] [seed=S] [curved=on|off]
+        flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
+        ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
+        curved = {"on": True, "off": False}.get(flags.get("curved"))
+        bench_scale(ns, int(flags.get("seed", 0)), curved)
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
