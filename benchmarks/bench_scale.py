@@ -4,6 +4,7 @@
     python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
     python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off]  # the scaling table
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
+    python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
     python benchmarks/bench_scale.py cold            # N = 10⁴, straight wire, λ = 200
     python benchmarks/bench_scale.py compare         # stage energies, new vs landed
@@ -185,6 +186,26 @@ def bench_scale(ns, seed=0, curved=None):
               f"({len(contact)} stages) | {t / its * 1e3:.2f} | {fac / its:.2f} | {rss:.2f} | "
               f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
               f"{pairs}", flush=True)  # fmt: skip
+
+
+def bench_bits():
+    """The fingerprint of the engine's iterates: the SHA-256 of every stage's positions of the
+    default N = 100 ramp (seed 0) and of an N = 300 ramp (geomspace(1, 2000, 10), seed 3),
+    and their Newton iterations. A change that claims to be bit for bit leaves both unchanged
+    (docs/performance.md quotes them)."""
+    import hashlib
+
+    h, its = hashlib.sha256(), 0
+    ramps = [
+        (Wire(k_b=5, k_s=5e5), Ramp(), 0),
+        (Wire(k_b=5, k_s=5e5, n_segments=300), Ramp(lambdas=np.geomspace(1, 2000, 10)), 3),
+    ]
+    for wire, ramp, seed in ramps:
+        for s in run_ramp(wire, ramp, seed=seed).stages:
+            h.update(s.positions.tobytes())
+            its += s.result.iterations
+    print(f"== bits: default N = 100 ramp (seed 0) + N = 300 ramp (seed 3) ==\n  {its} "
+          f"iterations, SHA-256 of the positions {h.hexdigest()[:16]}")  # fmt: skip
 
 
 def bench_lbfgs():
@@ -442,6 +463,8 @@ if __name__ == "__main__":
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
         bench_decrease(ns, float(flags.get("trap", 0.0)))
+    elif what == "bits":
+        bench_bits()
     elif what == "lbfgs":
         bench_lbfgs()
     elif what == "cold":
