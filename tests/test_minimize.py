@@ -1100,23 +1100,96 @@ def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decre
     metric that puts the assembled resolution above τ, and an 'assembled' H wrong along the
     uniform mode (a negative pivot that is round-off): the accurate product finds the point
     stable, but a Newton step from it predicts a decrease far above a one-ulp move's."""
-    n, metric = 200, 1e-9
-    fun, hess, x0 = _coherent_below_resolution(4, n=n)
-
-    def action(x, v):  # the exact H v, by differences
-        return np.asarray(hess(x) @ v).ravel()
-
-    def assembled(x):
-        return sp.csc_matrix(hess(x).toarray() - 0.5 / n)  # -0.5 along the uniform mode
-
-    assert max_force(fun(x0)[1]) < 0.25 * _force_resolution(assembled(x0), x0)
-    kw = dict(hess=assembled, hess_action=action, metric=np.full(n, metric), curvature_tol=1e-3)
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    assert max_force(fun(x0)[1]) < 0.25 * _force_resolution(kw["hess"](x0), x0)
     r = newton(fun, x0, maxiter=3, **kw)
     assert not r.converged, r.message
     assert "stable by the accurate Hessian product" not in r.message
     assert "not a minimum" in r.message
     assert r.max_force <= r.force_resolution  # what the force test and the product accepted
     assert r.energy > 1e-3  # and rightly refused: the minimum is E = 0 at x = x0 + 1
+
+
+def _wrong_along_the_uniform_mode(n=200, metric=1e-9):
+    """The chain of the test above with the accurate product and an 'assembled' H that is
+    wrong (-0.5) along its softest mode, the uniform one (exact curvature 3 × 10⁻³)."""
+    fun, hess, x0 = _coherent_below_resolution(4, n=n)
+
+    def action(x, v):
+        return np.asarray(hess(x) @ v).ravel()
+
+    def assembled(x):
+        return sp.csc_matrix(hess(x).toarray() - 0.5 / n)
+
+    kw = dict(hess=assembled, hess_action=action, metric=np.full(n, metric), curvature_tol=1e-3)
+    return fun, hess, x0, kw
+
+
+def test_the_accurate_decrease_is_the_newton_decrease_along_a_soft_mode():
+    """Conjugate gradients on the accurate product, preconditioned by the floored factor of the
+    wrong assembled H + σM, give ½ gᵀH⁻¹g (0.0333 at the start, nearly all along the soft
+    mode), where that factor alone predicts 163 times less; the estimate grows to it from
+    below, and a direction of negative curvature is reported, not used."""
+    from crumple.linalg import LDLT
+    from crumple.minimize_accurate import _cg_quadratic
+
+    fun, hess, x0, kw = _wrong_along_the_uniform_mode()
+    g = fun(x0)[1]
+    exact = float(g @ np.linalg.solve(hess(x0).toarray(), g))
+    n = g.size
+    pre = LDLT().factorize(kw["hess"](x0), shift=np.full(n, 0.178e-9), floor=np.full(n, 1e-12))
+    floored = float(g @ pre.solve(g))
+    assert exact > 100 * floored
+    ident = lambda v: v  # noqa: E731
+    est, why = _cg_quadratic(lambda v: kw["hess_action"](x0, v), g, pre.solve, ident)
+    assert why == "" and est <= exact * (1 + 1e-9)
+    np.testing.assert_allclose(est, exact, rtol=1e-3)
+    early, why = _cg_quadratic(lambda v: kw["hess_action"](x0, v), g, pre.solve, ident, 0.1 * exact)
+    assert why == "" and 0.1 * exact < early <= est
+    _, why = _cg_quadratic(lambda v: -v, g, ident, ident)
+    assert "not positive" in why
+
+
+def test_a_true_minimum_passes_the_accurate_decrease_test_and_a_coherent_point_does_not():
+    """The test itself, at two points of the chain: its minimum moved by a few ulps (forces
+    ~10⁻⁴, noise, below the floor) passes; the start (forces 10⁻³ along the soft mode) does
+    not. The one-ulp moves' decrease is ½ δᵀAδ on the accurate product."""
+    from types import SimpleNamespace
+
+    from crumple.linalg import LDLT
+    from crumple.minimize_accurate import _accurate_resolved
+
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    n = x0.size
+    floor = np.full(n, 1e-3 * 1e-9)  # τ M
+    x = x0 + 1.0  # the minimum, exactly representable
+    x[::7] = np.nextafter(x[::7], np.inf)
+    x[3::7] = np.nextafter(np.nextafter(x[3::7], -np.inf), -np.inf)
+    verdicts = []
+    for point in (x, x0):
+        e, g = fun(point)
+        h = kw["hess"](point)
+        fres = _force_resolution(h, point)
+        assert 1e-6 < max_force(g) < fres
+        st = SimpleNamespace(x=point, g=g, e=e, fmax=max_force(g), fres=fres, mask=None,
+                             hess_action=kw["hess_action"])  # fmt: skip
+        pre = LDLT().factorize(h, shift=np.full(n, 0.178e-9), floor=floor)
+        verdicts.append(_accurate_resolved(st, pre, None, floor))
+    (ok, note), (refused, why) = verdicts
+    assert ok and "a Newton step predicts a decrease of" in note
+    assert not refused and "not a minimum" in why
+
+
+def test_refusals_where_the_accurate_product_decides_are_capped(monkeypatch):
+    """Each refusal there costs an eigensolve; after ACCURATE_REFUSALS of them the stage
+    stops, unconverged, and says why."""
+    from crumple import minimize_accurate
+
+    monkeypatch.setattr(minimize_accurate, "ACCURATE_REFUSALS", 3)
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    r = newton(fun, x0, maxiter=500, **kw)
+    assert not r.converged and r.iterations == 3
+    assert r.message.startswith("stopped after 3 points stable by the accurate Hessian product")
 
 
 def test_newton_decrease_is_taken_in_the_complement_of_the_zero_modes():

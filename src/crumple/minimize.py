@@ -30,9 +30,15 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from . import minimize_accurate
 from .linalg import CSC, LDLT
 from .linalg_springs import new_rows, spring_step
-from .minimize_accurate import _accurate_check, _constrained_action, _recheck
+from .minimize_accurate import (
+    _accurate_check,
+    _accurate_resolved,
+    _constrained_action,
+    _recheck,
+)
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
@@ -257,10 +263,10 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     check = ldl.factorize(h, shift=floor)
     modes = _modes(zero_modes, st.x, m)
     if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
-        return _minimum(st, ftol, h, check, modes, "")
-    stable, mode, model = _accurate_check(st, h, m, ldl, floor, modes, check)  # H cannot tell
+        return _minimum(st, ftol, lambda: _resolved(st, h, check, modes), "")
+    stable, mode, pre = _accurate_check(st, h, m, ldl, floor, modes, check)  # H cannot tell
     if stable is not None:
-        return _minimum(st, ftol, h, model, modes, stable)
+        return _minimum(st, ftol, lambda: _accurate_resolved(st, pre, modes, floor), stable)
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
@@ -271,17 +277,25 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     return None
 
 
-def _minimum(st, ftol, h, model, modes, stable) -> str | None:
-    """At a stable point: the converged message, or None (``st.refine`` set) where the forces
-    are only below their resolution and a Newton step in ``model`` (a positive definite factor
-    of H, up to τM or the assembled resolution) still predicts a decrease: go on."""
+def _minimum(st, ftol, test, stable) -> str | None:
+    """At a stable point (``stable``: how it was found so, for the message): the converged
+    message, or None (``st.refine`` set, go on) where the forces are only below their
+    resolution and ``test()`` -> (resolved, note) finds that a Newton step still predicts a
+    decrease. Where the accurate product decided (``stable`` not empty), each refusal costs an
+    eigensolve: after ``minimize_accurate.ACCURATE_REFUSALS`` of them the stage stops,
+    unconverged."""
     if st.fmax <= ftol:
         return _converged(st, ftol) + stable
-    resolved, note = _resolved(st, h, model, modes)
-    if not resolved:  # forces below their resolution, but coherent
-        st.refine, st.refine_note = True, note
-        return None
-    return _converged(st, ftol) + stable + note
+    resolved, note = test()
+    if resolved:
+        return _converged(st, ftol) + stable + note
+    st.refine, st.refine_note = True, note  # forces below their resolution, but coherent
+    if stable:
+        st.refusals += 1
+        if st.refusals >= minimize_accurate.ACCURATE_REFUSALS:
+            return (f"stopped after {st.refusals} points stable by the accurate Hessian product "
+                    "whose forces were below their resolution but coherent")  # fmt: skip
+    return None
 
 
 def _converged(st, ftol) -> str:
@@ -406,6 +420,7 @@ class _State:
     hess_action: Callable | None = None  # the accurate H v, or None
     exact: bool = True  # the last direction is the exact Hessian's Newton step
     escapes: int = 0  # saddle escapes taken
+    refusals: int = 0  # points the accurate product found stable that the decrease test refused
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
     refine: bool = False  # forces below their resolution but a Newton step still pays: go on
     refine_note: str = ""

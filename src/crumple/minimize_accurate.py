@@ -14,6 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .linalg import CSC
+from .minimize_resolution import _bound, _ulp_moves, _verdict
 
 #: How many ε_mach × max_j |H_jj| the round-off of an assembled Hessian's entries is taken to
 #: be (:func:`_assembly_resolution`). A diagonal entry of a chain sums the blocks of up to three
@@ -50,6 +51,12 @@ ACCURATE_ESCAPE = False
 #: from the straight wire at λ = 7.02, μ = -3.80, the count found no negative pivot at a
 #: point of bending energy 3 × 10⁻⁶ and the stage was accepted).
 ACCURATE_WHEN_POSITIVE = False
+#: Points the accurate product finds stable but the decrease test refuses (forces below their
+#: resolution, yet coherent) before a stage stops, unconverged: each costs an eigensolve and a
+#: conjugate-gradient solve on the accurate product (~14 s at N = 10⁵), and Newton, stepping
+#: with the assembled H, moves along the soft modes that made the forces coherent only as
+#: fast as their round-off curvature lets it.
+ACCURATE_REFUSALS = 20
 
 
 def _assembly_resolution(h, m) -> float:
@@ -150,14 +157,13 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
 
 
 def _accurate_check(st, h, m, ldl, floor, modes, check):
-    """At an equilibrium whose inertia count found negative curvature: (suffix, mode, model).
-    suffix is the converged message's addition when ``st.hess_action`` shows the point stable
-    where the assembled H cannot resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else
-    None; mode is (μ, v), the accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE`
-    and μ < -τ, else None; model, with a suffix, the factor of H + σM (positive definite, σ a
-    tenth of the assembled resolution) in which a point accepted below the force floor is
-    tested for the decrease a Newton step predicts (``minimize_resolution._resolved``: the
-    factor of H + τM has the round-off's negative pivots here)."""
+    """At an equilibrium the inertia count could not decide (it found negative curvature, or
+    :data:`ACCURATE_WHEN_POSITIVE`): (suffix, mode, factor). suffix is the converged message's
+    addition when ``st.hess_action`` shows the point stable where the assembled H cannot
+    resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None; mode is (μ, v), the
+    accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE` and μ < -τ, else None;
+    factor, with a suffix, the eigensolve's preconditioner (the factor of H + σM), which
+    :func:`_accurate_resolved` uses in turn."""
     if st.hess_action is None:
         return None, None, None
     tau = float(floor[0] / m[0])
@@ -174,6 +180,70 @@ def _accurate_check(st, h, m, ldl, floor, modes, check):
         )
         return note, None, pre
     return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None), None
+
+
+def _accurate_resolved(st, pre, modes, floor) -> tuple[bool, str]:
+    """The decrease test of a point below the force floor (``minimize_resolution._resolved``)
+    where the accurate product decided that it is stable: (resolved, note).
+
+    With A = H + τM applied by the accurate product, the decrease a Newton step predicts,
+    ½ gᵀA⁻¹g in the complement of the zero modes, is found by projected conjugate gradients
+    preconditioned by ``pre`` (:func:`_cg_quadratic`); that of a one-ulp move δ is ½ δᵀAδ
+    (= ½ vᵀA⁻¹v for v = Aδ, no solve). No factor of the assembled H can stand in for A here:
+    along its soft modes the assembled curvature is round-off, as large as the resolution
+    (measured on the test's chain: the floored factor of H + σM predicted 2.0 × 10⁻⁴ where
+    ½ gᵀH⁻¹g = 0.033)."""
+
+    def action(v):
+        return np.asarray(st.hess_action(st.x, v), dtype=np.float64).ravel() + floor * v
+
+    noise = float(np.mean([0.5 * float(d @ action(d)) for d in _ulp_moves(st)]))
+    g = np.asarray(st.g, dtype=np.float64).ravel()
+    q = None if modes is None else np.linalg.qr(modes)[0]
+    project = (lambda v: v) if q is None else (lambda v: v - q @ (q.T @ v))
+    bound = _bound(st, noise)
+    quad, why = _cg_quadratic(action, project(g), lambda r: project(pre.solve(r)), project,
+                              2.0 * bound)  # fmt: skip
+    if not why and 0.5 * quad > bound:  # stopped as soon as the lower bound passed the bound
+        why = f"above {bound:.3g} (a lower bound: the solve stopped there)"
+    return _verdict(st, 0.5 * quad, noise, why)
+
+
+def _cg_quadratic(action, b, precondition, project, above=np.inf):
+    """bᵀA⁻¹b by preconditioned conjugate gradients from 0, in the subspace ``project`` keeps:
+    (estimate, why). The estimate bᵀs_k grows monotonically to bᵀA⁻¹b (each step adds
+    (rᵀz)²/pᵀAp, a Gauss-quadrature lower bound), so it stops as soon as it exceeds ``above``;
+    else it has settled when it moved by less than :data:`ACCURATE_RTOL` of itself over
+    :data:`ACCURATE_WINDOW` iterations (the residual is floored by the stiff modes' round-off,
+    as in :func:`_lobpcg`, the estimate is not). why is "" when the estimate settled or passed
+    ``above``, else what it is: a lower bound that did not settle within
+    :data:`ACCURATE_MAXITER` iterations, or one where A is not positive along a direction."""
+    r = b.copy()
+    z = precondition(r)
+    p = z.copy()
+    rz = float(r @ z)
+    est, history = 0.0, [0.0]
+    for _ in range(ACCURATE_MAXITER):
+        if not rz > 0:  # nothing left to solve for (b = 0, or only round-off)
+            return est, ""
+        ap = project(action(p))
+        pap = float(p @ ap)
+        if not (pap > 0 and np.isfinite(pap)):
+            return est, "a lower bound: the accurate H + τM is not positive along its direction"
+        alpha = rz / pap
+        est += alpha * rz
+        if est > above:
+            return est, ""
+        history.append(est)
+        recent = history[-ACCURATE_WINDOW - 1 :]
+        if len(recent) > ACCURATE_WINDOW and recent[-1] - recent[0] <= ACCURATE_RTOL * est:
+            return est, ""
+        r = r - alpha * ap
+        z = precondition(r)
+        rz_new = float(r @ z)
+        p = z + (rz_new / rz) * p
+        rz = rz_new
+    return est, f"a lower bound, not settled in {ACCURATE_MAXITER} conjugate-gradient iterations"
 
 
 def _constrained_action(mask, hess_action):

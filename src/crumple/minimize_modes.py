@@ -50,7 +50,7 @@ def _gauge_pin(h, modes) -> np.ndarray | None:
     """
     hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
     w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
-    if w.shape[0] == 1 and isinstance(hs, CSC):  # the rotation alone: the loop below, compiled
+    if w.shape[0] == 1 and isinstance(hs, CSC):  # the rotation alone: the loop below, unrolled
         mode = w[0]
         j = int(np.argmax(np.abs(mode)))
         if not abs(mode[j]) > 0:

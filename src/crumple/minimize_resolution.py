@@ -43,18 +43,39 @@ def _force_resolution(h, x) -> float:
 def _resolved(st, h, f, modes) -> tuple[bool, str]:
     """Whether a point below the force floor is a minimum (it passed the stability test; ``f``
     the factor of H + τM), and the message's note either way."""
-    decrease, noise = _newton_decrease(st, h, f, modes)
-    bound = max(resolution(st.e), RESOLUTION_FACTOR**2 * noise)
-    if decrease <= bound:
+    return _verdict(st, *_newton_decrease(st, h, f, modes))
+
+
+def _verdict(st, decrease, noise, undecided="") -> tuple[bool, str]:
+    """The decrease test's verdict and note: a minimum if the predicted ``decrease`` is within
+    max(16 ε|E|, 10² × ``noise``, that of a one-ulp move). ``undecided`` (why the decrease is
+    only a lower bound that did not settle) refuses the point whatever the numbers."""
+    bound = _bound(st, noise)
+    if decrease <= bound and not undecided:
         return True, (
             f"; a Newton step predicts a decrease of {decrease:.3g} <= {bound:.3g} "
             f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move)"
         )
+    what = undecided or f"above {bound:.3g} ({RESOLUTION_FACTOR:g}² × that of a one-ulp move)"
     return False, (
         f"had max force {st.fmax:.3g} <= its resolution {st.fres:.3g}, but a Newton step "
-        f"predicted a decrease of {decrease:.3g}, above {bound:.3g} "
-        f"({RESOLUTION_FACTOR:g}² × that of a one-ulp move): not a minimum"
+        f"predicted a decrease of {decrease:.3g}, {what}: not a minimum"
     )
+
+
+def _bound(st, noise) -> float:
+    """The largest decrease a minimum's Newton step may predict: max(16 ε|E|, 10² × ``noise``)."""
+    return max(resolution(st.e), RESOLUTION_FACTOR**2 * noise)
+
+
+def _ulp_moves(st) -> list[np.ndarray]:
+    """Two one-ulp moves of the coordinates, δ_j = ±ulp(x_j) with random signs (fixed seed),
+    zero on the fixed rows (``st.mask``): what the force resolution is the change of."""
+    u = np.spacing(np.abs(np.asarray(st.x, dtype=np.float64))).ravel()
+    if st.mask is not None:
+        u[st.mask] = 0.0
+    rng = np.random.default_rng(0)
+    return [u * rng.choice((-1.0, 1.0), size=u.size) for _ in range(2)]
 
 
 def _newton_decrease(st, h, f, modes) -> tuple[float, float]:
@@ -76,12 +97,7 @@ def _newton_decrease(st, h, f, modes) -> tuple[float, float]:
     ramp predicted 10⁻²² … 2·10⁻¹²; docs/performance.md, "True minima below the force
     resolution"."""
     g = np.asarray(st.g, dtype=np.float64).ravel()
-    u = np.spacing(np.abs(np.asarray(st.x, dtype=np.float64))).ravel()
-    if st.mask is not None:
-        u[st.mask] = 0.0
-    rng = np.random.default_rng(0)
-    vs = [g] + [np.asarray(h @ (u * rng.choice((-1.0, 1.0), size=u.size))).ravel()
-                for _ in range(2)]  # fmt: skip
+    vs = [g] + [np.asarray(h @ delta).ravel() for delta in _ulp_moves(st)]
     if modes is not None:
         aw = np.column_stack([f.solve(w) for w in modes.T])
         waw = modes.T @ aw
