@@ -447,6 +447,14 @@ def _curved_ramps(wire, seeds, on):
     print(f"  {mode} total: {int(tot_its)} iterations, {tot_t:.2f} s CPU", flush=True)
 
 
+def _curved_flag(flags):
+    """``curved=on|off`` as the ramp's ``curved_steps`` (absent: None, the default)."""
+    value = flags.get("curved")
+    if value not in (None, "on", "off"):
+        raise SystemExit(f"curved must be on or off, got {value!r}")
+    return None if value is None else value == "on"
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -454,12 +462,11 @@ if __name__ == "__main__":
     elif what == "smooth":  # smooth [N …] [curved=on|off]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or (100, 1000, 2000, 10_000)
-        bench_smooth(ns, {"on": True, "off": False}.get(flags.get("curved")))
+        bench_smooth(ns, _curved_flag(flags))
     elif what == "scale":  # scale [N …] [seed=S] [curved=on|off]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
-        curved = {"on": True, "off": False}.get(flags.get("curved"))
-        bench_scale(ns, int(flags.get("seed", 0)), curved)
+        bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags))
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
