@@ -264,9 +264,9 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     modes = _modes(zero_modes, st.x, m)
     if _negative_count(check, modes) == 0 and not _recheck(st, h, m, floor):
         return _minimum(st, ftol, lambda: _resolved(st, h, check, modes), "")
-    stable, mode, pre = _accurate_check(st, h, m, ldl, floor, modes, check)  # H cannot tell
+    stable, mode, model = _accurate_check(st, h, m, ldl, floor, modes, check)  # H cannot tell
     if stable is not None:
-        return _minimum(st, ftol, lambda: _accurate_resolved(st, pre, modes, floor), stable)
+        return _minimum(st, ftol, lambda: _accurate_resolved(st, model, modes, floor), stable)
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
@@ -282,8 +282,8 @@ def _minimum(st, ftol, test, stable) -> str | None:
     message, or None (``st.refine`` set, go on) where the forces are only below their
     resolution and ``test()`` -> (resolved, note) finds that a Newton step still predicts a
     decrease. Where the accurate product decided (``stable`` not empty), each refusal costs an
-    eigensolve: after ``minimize_accurate.ACCURATE_REFUSALS`` of them the stage stops,
-    unconverged."""
+    eigensolve: after ``minimize_accurate.ACCURATE_REFUSALS`` of them in a stage (not
+    necessarily in a row) it stops, unconverged, even if it was still approaching ftol."""
     if st.fmax <= ftol:
         return _converged(st, ftol) + stable
     resolved, note = test()
@@ -294,7 +294,8 @@ def _minimum(st, ftol, test, stable) -> str | None:
         st.refusals += 1
         if st.refusals >= minimize_accurate.ACCURATE_REFUSALS:
             return (f"stopped after {st.refusals} points stable by the accurate Hessian product "
-                    "whose forces were below their resolution but coherent")  # fmt: skip
+                    "whose forces were below their resolution but coherent (the last point "
+                    f"{note})")  # fmt: skip
     return None
 
 

@@ -138,9 +138,9 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
     the assembled H is not): :func:`_lobpcg` preconditioned by the factor of the assembled
     H + σM (σ = ``PRECONDITIONER_SHIFT`` × its resolution, pivots floored), started from the
     factor's negative direction and two random vectors in the M-complement of the zero modes,
-    as ``minimize_modes._lowest_mode``. Returns (μ, converged, v, iterations, factor): μ the
-    lowest Ritz value, converged whether it settled (:data:`ACCURATE_RTOL`), factor the
-    preconditioner's (positive definite)."""
+    as ``minimize_modes._lowest_mode``. Returns (μ, converged, v, iterations, (factor, X)): μ
+    the lowest Ritz value, converged whether it settled (:data:`ACCURATE_RTOL`), factor the
+    preconditioner's (positive definite), X the Ritz block (the lowest modes found)."""
     hs = h.tocsc() if isinstance(h, CSC) else (h if sp.issparse(h) else sp.csc_matrix(h))
     n = hs.shape[0]
     tau = float(floor[0] / m[0])
@@ -153,24 +153,24 @@ def _accurate_lowest(h, m, ldl, floor, modes, action, check):
     with np.errstate(all="ignore"):
         mu, x, settled = _lobpcg(action, m, np.column_stack(start), pre.solve, modes, tau, history)
     converged = settled and bool(np.isfinite(mu[0]))
-    return float(mu[0]), converged, x[:, 0], len(history), pre
+    return float(mu[0]), converged, x[:, 0], len(history), (pre, x)
 
 
 def _accurate_check(st, h, m, ldl, floor, modes, check):
     """At an equilibrium the inertia count could not decide (it found negative curvature, or
-    :data:`ACCURATE_WHEN_POSITIVE`): (suffix, mode, factor). suffix is the converged message's
+    :data:`ACCURATE_WHEN_POSITIVE`): (suffix, mode, model). suffix is the converged message's
     addition when ``st.hess_action`` shows the point stable where the assembled H cannot
     resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None; mode is (μ, v), the
     accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE` and μ < -τ, else None;
-    factor, with a suffix, the eigensolve's preconditioner (the factor of H + σM), which
-    :func:`_accurate_resolved` uses in turn."""
+    model, with a suffix, the eigensolve's preconditioner (the factor of H + σM) and its Ritz
+    block, which :func:`_accurate_resolved` uses in turn."""
     if st.hess_action is None:
         return None, None, None
     tau = float(floor[0] / m[0])
     res = _assembly_resolution(h, m)
     if not res > tau:
         return None, None, None
-    mu, converged, v, its, pre = _accurate_lowest(
+    mu, converged, v, its, model = _accurate_lowest(
         h, m, ldl, floor, modes, lambda v: st.hess_action(st.x, v), check
     )
     if mu >= -tau and converged:
@@ -178,72 +178,134 @@ def _accurate_check(st, h, m, ldl, floor, modes, check):
             f"; stable by the accurate Hessian product: lowest eigenvalue {mu:.6g} >= -{tau:.3g} "
             f"({its} LOBPCG iterations), below the assembled matrix's resolution {res:.3g}"
         )
-        return note, None, pre
+        return note, None, model
     return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None), None
 
 
-def _accurate_resolved(st, pre, modes, floor) -> tuple[bool, str]:
+def _accurate_resolved(st, model, modes, floor) -> tuple[bool, str]:
     """The decrease test of a point below the force floor (``minimize_resolution._resolved``)
     where the accurate product decided that it is stable: (resolved, note).
 
     With A = H + τM applied by the accurate product, the decrease a Newton step predicts,
-    ½ gᵀA⁻¹g in the complement of the zero modes, is found by projected conjugate gradients
-    preconditioned by ``pre`` (:func:`_cg_quadratic`); that of a one-ulp move δ is ½ δᵀAδ
-    (= ½ vᵀA⁻¹v for v = Aδ, no solve). No factor of the assembled H can stand in for A here:
-    along its soft modes the assembled curvature is round-off, as large as the resolution
-    (measured on the test's chain: the floored factor of H + σM predicted 2.0 × 10⁻⁴ where
-    ½ gᵀH⁻¹g = 0.033)."""
+    ½ gᵀA⁻¹g in the complement of the zero modes, is :func:`_decrease_estimate`'s, from the
+    eigensolve's ``model`` (its preconditioner and Ritz block); that of a one-ulp move δ is
+    ½ δᵀAδ (= ½ vᵀA⁻¹v for v = Aδ, no solve; the product taken on δ/|δ|). No factor of the
+    assembled H can stand in for A here: along its soft modes the assembled curvature is
+    round-off, as large as the resolution (measured on the test's chain: the floored factor of
+    H + σM predicted 2.0 × 10⁻⁴ where ½ gᵀH⁻¹g = 0.033)."""
 
     def action(v):
         return np.asarray(st.hess_action(st.x, v), dtype=np.float64).ravel() + floor * v
 
-    noise = float(np.mean([0.5 * float(d @ action(d)) for d in _ulp_moves(st)]))
+    noise = float(np.mean([0.5 * float(d @ d) * _rayleigh_unit(action, d) for d in _ulp_moves(st)]))
     g = np.asarray(st.g, dtype=np.float64).ravel()
     q = None if modes is None else np.linalg.qr(modes)[0]
     project = (lambda v: v) if q is None else (lambda v: v - q @ (q.T @ v))
     bound = _bound(st, noise)
-    quad, why = _cg_quadratic(action, project(g), lambda r: project(pre.solve(r)), project,
-                              2.0 * bound)  # fmt: skip
+    pre, ritz = model
+    quad, why = _decrease_estimate(action, project(g), pre.solve, project, ritz, 2.0 * bound)
     if not why and 0.5 * quad > bound:  # stopped as soon as the lower bound passed the bound
         why = f"above {bound:.3g} (a lower bound: the solve stopped there)"
     return _verdict(st, 0.5 * quad, noise, why)
 
 
+def _rayleigh_unit(action, d) -> float:
+    """d̂ᵀA d̂ for d̂ = d/|d| (0 for d = 0): a caller's product need not be linear down to the
+    ulp scale of d itself (one by finite differences would not be)."""
+    norm = float(np.linalg.norm(d))
+    if not norm > 0:
+        return 0.0
+    u = d / norm
+    return float(u @ action(u))
+
+
+def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
+    """bᵀA⁻¹b in the subspace ``project`` keeps (b already in it), as a lower bound: (value, why).
+
+    Conjugate gradients (:func:`_cg_quadratic`) preconditioned by ``solve`` (the factor of the
+    assembled H + σM, exact enough on the stiff modes) plus a coarse correction on Y, the
+    projected Ritz block ``ritz`` of the accurate eigensolve: z = P solve(P r) + Y(YᵀAY)⁻¹Yᵀr.
+    The factor's curvature along the soft modes is round-off, so without the correction their
+    share of bᵀA⁻¹b (nearly all of it where the forces are coherent) hides behind a plateau of
+    the estimate until the rest of the residual has fallen to its level. The value is then the
+    Galerkin quadratic bᵀV(VᵀAV)⁻¹Vᵀb over V = [Y, s], s the CG solution: at least the CG
+    estimate (s ∈ V) and that of Y alone, and still at most bᵀA⁻¹b."""
+    y = None
+    if ritz is not None:
+        y = _orthonormal(np.column_stack([project(c) for c in np.asarray(ritz, float).T]))
+
+    def precondition(r):
+        z = project(solve(project(r)))
+        if y is not None:
+            z = z + y @ np.linalg.solve(cy, y.T @ r)
+        return z
+
+    if y is not None:
+        cy = _sym(y.T @ np.column_stack([project(action(c)) for c in y.T]))
+    est, s, why = _cg_quadratic(action, b, precondition, project, above)
+    if why or est > above:
+        return est, why
+    v = _orthonormal(np.column_stack(([] if y is None else [y]) + [s[:, None]]))
+    if v is None:
+        return est, why
+    av = np.column_stack([project(action(c)) for c in v.T])
+    vb = v.T @ b
+    w, u = np.linalg.eigh(_sym(v.T @ av))
+    if not w[0] > 0:
+        return est, "a lower bound: the accurate H + τM is not positive on the Ritz block"
+    return max(est, float(np.sum((u.T @ vb) ** 2 / w))), ""
+
+
+def _orthonormal(a):
+    """An orthonormal basis of the columns of ``a`` (directions below 10⁻¹⁰ of the largest
+    dropped), or None."""
+    if a is None or a.shape[1] == 0:
+        return None
+    u, sv, _ = np.linalg.svd(a, full_matrices=False)
+    keep = sv > 1e-10 * sv[0] if sv.size and sv[0] > 0 else np.zeros(0, dtype=bool)
+    return u[:, keep] if keep.any() else None
+
+
 def _cg_quadratic(action, b, precondition, project, above=np.inf):
     """bᵀA⁻¹b by preconditioned conjugate gradients from 0, in the subspace ``project`` keeps:
-    (estimate, why). The estimate bᵀs_k grows monotonically to bᵀA⁻¹b (each step adds
-    (rᵀz)²/pᵀAp, a Gauss-quadrature lower bound), so it stops as soon as it exceeds ``above``;
-    else it has settled when it moved by less than :data:`ACCURATE_RTOL` of itself over
-    :data:`ACCURATE_WINDOW` iterations (the residual is floored by the stiff modes' round-off,
-    as in :func:`_lobpcg`, the estimate is not). why is "" when the estimate settled or passed
-    ``above``, else what it is: a lower bound that did not settle within
-    :data:`ACCURATE_MAXITER` iterations, or one where A is not positive along a direction."""
+    (estimate, s, why), s the last iterate. The estimate bᵀs_k grows monotonically to bᵀA⁻¹b
+    (each step adds (rᵀz)²/pᵀAp, a Gauss-quadrature lower bound), so it stops as soon as it
+    exceeds ``above``; else it has settled when it moved by less than :data:`ACCURATE_RTOL` of
+    itself over :data:`ACCURATE_WINDOW` iterations (the residual is floored by the stiff modes'
+    round-off, as in :func:`_lobpcg`, the estimate is not). why is "" when the estimate settled
+    or passed ``above``, else what it is: a lower bound that did not settle within
+    :data:`ACCURATE_MAXITER` iterations, or one where A, or the preconditioned residual, is not
+    positive (round-off)."""
     r = b.copy()
+    s = np.zeros_like(b)
+    if not np.any(r):
+        return 0.0, s, ""
     z = precondition(r)
     p = z.copy()
     rz = float(r @ z)
     est, history = 0.0, [0.0]
     for _ in range(ACCURATE_MAXITER):
-        if not rz > 0:  # nothing left to solve for (b = 0, or only round-off)
-            return est, ""
+        if not rz > 0:
+            return est, s, "a lower bound: the preconditioned residual lost its sign (round-off)"
         ap = project(action(p))
         pap = float(p @ ap)
         if not (pap > 0 and np.isfinite(pap)):
-            return est, "a lower bound: the accurate H + τM is not positive along its direction"
+            return est, s, "a lower bound: the accurate H + τM is not positive along its direction"
         alpha = rz / pap
         est += alpha * rz
+        s = s + alpha * p
         if est > above:
-            return est, ""
+            return est, s, ""
         history.append(est)
         recent = history[-ACCURATE_WINDOW - 1 :]
         if len(recent) > ACCURATE_WINDOW and recent[-1] - recent[0] <= ACCURATE_RTOL * est:
-            return est, ""
-        r = r - alpha * ap
+            return est, s, ""
+        r = project(r - alpha * ap)
         z = precondition(r)
         rz_new = float(r @ z)
         p = z + (rz_new / rz) * p
         rz = rz_new
-    return est, f"a lower bound, not settled in {ACCURATE_MAXITER} conjugate-gradient iterations"
+    return est, s, f"a lower bound, not settled in {ACCURATE_MAXITER} conjugate-gradient iterations"
 
 
 def _constrained_action(mask, hess_action):
