@@ -230,40 +230,32 @@ def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
     the estimate until the rest of the residual has fallen to its level. The value is then the
     Galerkin quadratic bᵀV(VᵀAV)⁻¹Vᵀb over V = [Y, s], s the CG solution: at least the CG
     estimate (s ∈ V) and that of Y alone, and still at most bᵀA⁻¹b."""
-    y = None
+    y, ay = None, None
     if ritz is not None:
-        y = _orthonormal(np.column_stack([project(c) for c in np.asarray(ritz, float).T]))
+        ritz = np.column_stack([project(c) for c in np.asarray(ritz, float).T])
+        y = _m_orthonormal(ritz, np.ones(ritz.shape[0]), drop=1e-16)
+        y = y if y.shape[1] else None
+    if y is not None:
+        ay = np.column_stack([project(action(c)) for c in y.T])
+        cy = _sym(y.T @ ay)
 
     def precondition(r):
         z = project(solve(project(r)))
-        if y is not None:
-            z = z + y @ np.linalg.solve(cy, y.T @ r)
-        return z
+        return z if y is None else z + y @ np.linalg.solve(cy, y.T @ r)
 
-    if y is not None:
-        cy = _sym(y.T @ np.column_stack([project(action(c)) for c in y.T]))
     est, s, why = _cg_quadratic(action, b, precondition, project, above)
-    if why or est > above:
+    if why or est > above or y is None:
         return est, why
-    v = _orthonormal(np.column_stack(([] if y is None else [y]) + [s[:, None]]))
-    if v is None:
-        return est, why
-    av = np.column_stack([project(action(c)) for c in v.T])
-    vb = v.T @ b
+    s = s - y @ (y.T @ s)  # V = [Y, the part of s outside Y], orthonormal
+    norm = float(np.linalg.norm(s))
+    v, av = y, ay
+    if norm > 0:
+        v = np.column_stack([y, s / norm])
+        av = np.column_stack([ay, project(action(s / norm))])
     w, u = np.linalg.eigh(_sym(v.T @ av))
     if not w[0] > 0:
         return est, "a lower bound: the accurate H + τM is not positive on the Ritz block"
-    return max(est, float(np.sum((u.T @ vb) ** 2 / w))), ""
-
-
-def _orthonormal(a):
-    """An orthonormal basis of the columns of ``a`` (directions below 10⁻¹⁰ of the largest
-    dropped), or None."""
-    if a is None or a.shape[1] == 0:
-        return None
-    u, sv, _ = np.linalg.svd(a, full_matrices=False)
-    keep = sv > 1e-10 * sv[0] if sv.size and sv[0] > 0 else np.zeros(0, dtype=bool)
-    return u[:, keep] if keep.any() else None
+    return max(est, float(np.sum((u.T @ (v.T @ b)) ** 2 / w))), ""
 
 
 def _cg_quadratic(action, b, precondition, project, above=np.inf):
