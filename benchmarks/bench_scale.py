@@ -12,6 +12,7 @@
     python benchmarks/bench_scale.py gauge [N …]     # the rotation's gauge in the step: on vs off
     python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
     python benchmarks/bench_scale.py curved [N …] [seeds=0,1]  # default ramps, curved steps off/on
+    python benchmarks/bench_scale.py crawl [N] [seed=] [stage=]  # one stage: what limits its steps
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -447,6 +448,72 @@ def _curved_ramps(wire, seeds, on):
     print(f"  {mode} total: {int(tot_its)} iterations, {tot_t:.2f} s CPU", flush=True)
 
 
+def bench_crawl(n: int = 10_000, seed: int = 0, stage: int = 43, curved=None):
+    """One stage of the default ramp, step by step: what limits its steps.
+
+    The ramp is run to the stage before (the same iterates as the whole ramp), then the stage
+    is minimised with two of the minimiser's private steps wrapped (instrumentation only, the
+    iterates unchanged): the Newton or fallback direction p before the contacts' springs and
+    the step s after them (``minimize._barrier_step``), and the line search's trust radius R,
+    collision cut and evaluations (``minimize._line_search``)."""
+    import crumple.minimize as mz
+
+    wire = continuum_wire(n) if n != 100 else Wire(k_b=5, k_s=5e5)
+    lams = default_schedule()
+    ramp = Ramp(lambdas=lams[:stage], curved_steps=curved)
+    before, t_before = cpu(lambda: run_ramp(wire, ramp, seed=seed))
+    steps, searches = [], []
+    barrier_step, line_search = mz._barrier_step, mz._line_search
+
+    def traced_barrier_step(st, p, barriers, ldl):
+        s = barrier_step(st, p, barriers, ldl)
+        steps.append((max_force(p), max_force(s)))
+        return s
+
+    def traced_line_search(st, fun, p, step_limit, *args):
+        cut = []
+
+        def limit(x, q):
+            cut.append(step_limit(x, q))
+            return cut[-1]
+
+        radius, nfev = st.radius, st.nfev
+        out = line_search(st, fun, p, limit if step_limit is not None else None, *args)
+        searches.append((st.exact, radius, cut[0] if cut else 1.0, st.nfev - nfev))
+        return out
+
+    mz._barrier_step, mz._line_search = traced_barrier_step, traced_line_search
+    try:
+        res, t = cpu(lambda: minimize_wire(
+            wire, before.stages[-1].positions, lams[stage], ftol=ramp.ftol, maxiter=ramp.maxiter,
+            max_step=ramp.max_step, curved_steps=ramp.curved_steps))  # fmt: skip
+    finally:
+        mz._barrier_step, mz._line_search = barrier_step, line_search
+    p, s = np.array(steps).T if steps else (np.ones(1), np.ones(1))
+    exact, radius, safe, nfev = np.array(searches).T
+    q = s / p
+    print(
+        f"== N = {n}, seed {seed}, stage {stage} (λ = {lams[stage]:.4g}), curved steps "
+        f"{'on' if ramp.curved_steps else 'off'}: {res.iterations} iterations, converged "
+        f"{res.converged}, {t:.0f} s CPU ({t_before:.0f} s for the stages before) =="
+    )
+    print(
+        f"  fallback (H indefinite) {1 - exact.mean():.0%}, cut by collision "
+        f"{np.mean(safe < 1):.1%}, evaluations per line search {nfev.mean():.2f}"
+    )
+    print(
+        f"  median |p| {np.median(p):.2e}, median |s| {np.median(s):.2e}, median R "
+        f"{np.median(radius):.2e} (largest node displacement; d = {wire.hard_core:.1e}, "
+        f"segment {wire.rest_length:.1e})"
+    )
+    print(
+        f"  the springs cut the step: median |s|/|p| {np.median(q):.2f}, below 0.5 in "
+        f"{np.mean(q < 0.5):.0%}, below 0.1 in {np.mean(q < 0.1):.0%} of {len(q)} steps"
+    )
+    start = WireEnergy(wire, lams[stage])(before.stages[-1].positions)[0]
+    print(f"  energy at λ = {lams[stage]:.4g}: {start:.6f} -> {res.energy:.6f}")
+
+
 def _curved_flag(flags):
     """``curved=on|off`` as the ramp's ``curved_steps`` (absent: None, the default)."""
     value = flags.get("curved")
@@ -489,5 +556,10 @@ if __name__ == "__main__":
         seeds = [a for a in sys.argv[2:] if a.startswith("seeds=")]
         big = tuple(int(v) for v in seeds[0][6:].split(",")) if seeds else (0,)
         bench_curved([int(v) for v in sys.argv[2:] if not v.startswith("seeds=")], big_seeds=big)
+    elif what == "crawl":  # crawl [N] [seed=S] [stage=K] [curved=on|off]
+        flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
+        ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
+        bench_crawl(ns[0], int(flags.get("seed", 0)), int(flags.get("stage", 43)),
+                    _curved_flag(flags))  # fmt: skip
     else:
         raise SystemExit(__doc__)
