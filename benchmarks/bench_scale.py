@@ -489,7 +489,10 @@ def bench_crawl(n: int = 10_000, seed: int = 0, stage: int = 43, curved=None):
             max_step=ramp.max_step, curved_steps=ramp.curved_steps))  # fmt: skip
     finally:
         mz._barrier_step, mz._line_search = barrier_step, line_search
-    p, s = np.array(steps).T if steps else (np.ones(1), np.ones(1))
+    if not steps or not searches:
+        print(f"  stage {stage}: {res.iterations} iterations, no spring step to trace")
+        return
+    p, s = np.array(steps).T
     exact, radius, safe, nfev = np.array(searches).T
     q = s / p
     print(
