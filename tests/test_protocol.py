@@ -233,6 +233,26 @@ def test_curved_steps_keep_a_contact_ramp_at_true_equilibria(monkeypatch):
     assert r.converged and r.curved_steps == 0
 
 
+def test_exact_fallback_keeps_a_contact_ramp_at_true_equilibria(monkeypatch):
+    """The opt-in exact fallback with the σ search (``relax.EXACT_FALLBACK``,
+    ``minimize.SHIFT_DESCENTS``): a contact ramp still ends every stage converged and stable,
+    never crossing, no accepted step raising the energy, and it does factorise more (the σ
+    search) than the default engine."""
+    import crumple.minimize as mz
+
+    wire, lams = Wire(k_b=5, k_s=5e5), (1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0)
+    off = run_ramp(wire, Ramp(lambdas=lams), seed=2)
+    monkeypatch.setattr(relax, "EXACT_FALLBACK", True)
+    monkeypatch.setattr(mz, "SHIFT_DESCENTS", 4)
+    on, audit = audited_ramp(wire, Ramp(lambdas=lams), seed=2)
+    assert on.converged and not audit.violations, audit.violations[:5]
+    assert on.stages[-1].energy.hard_core > 0
+    assert_stage_bookkeeping(on)
+    per_it = [sum(s.result.factorizations for s in r.stages)
+              / sum(s.result.iterations for s in r.stages) for r in (off, on)]  # fmt: skip
+    assert per_it[1] > per_it[0]
+
+
 def test_default_schedule():
     s = default_schedule()
     assert len(s) == 44

@@ -53,6 +53,12 @@ SKIP_MAX = 8
 RELISTINGS = 3
 #: Shifts σM :func:`_direction` tries on the fallback before it solves with the modified factor.
 SHIFTS = 60
+#: Once a shift σM makes the fallback positive definite, :func:`_lower_shift` tries σ divided
+#: by ``SHIFT_DESCENT``, up to ``SHIFT_DESCENTS`` times, while the step is shorter than the
+#: trust radius over ``SHIFT_ROOM`` (0: the first positive definite shift is kept).
+SHIFT_DESCENTS = 0
+SHIFT_DESCENT = 4.0
+SHIFT_ROOM = 4.0
 
 
 def newton(
@@ -473,15 +479,35 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     for attempt in range(SHIFTS):  # the last one complete: its modified factor is the step's
         f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor, trial=attempt < SHIFTS - 1)
         if f.modified == 0:
+            p = -f.solve(g)
+            if SHIFT_DESCENTS and sigma > 0.0:
+                sigma, f, p = _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p)
             st.sigma = sigma
             st.factor, st.model = f, _model_of(hs, sigma * m + pin)
-            return -f.solve(g).reshape(st.x.shape)
+            return p.reshape(st.x.shape)
         v = f.negative_direction()
         mu = float(v @ (hs @ v) + v @ (pin * v)) / float(v @ (m * v)) if v is not None else 0.0
         sigma = max(2.0 * sigma, -2.0 * mu, floor[0] / m[0])
     st.sigma = sigma
     st.factor, st.model = f, None
     return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
+
+
+def _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p):
+    """The shift lowered, by ``SHIFT_DESCENT`` at a time and ``SHIFT_DESCENTS`` times at most,
+    while the shifted step stays well inside the trust radius (its largest row displacement
+    below ``st.radius / SHIFT_ROOM``) and the lowered matrix is still positive definite: a
+    trust-region search for σ, which the doubling from half the last σ only overshoots.
+    Returns (σ, its factor, its step)."""
+    for _ in range(SHIFT_DESCENTS):
+        if not max_force(p.reshape(st.x.shape)) * SHIFT_ROOM < st.radius:
+            break
+        lower = sigma / SHIFT_DESCENT
+        trial = ldl.factorize(hs, shift=lower * m + pin, floor=floor, trial=True)
+        if trial.modified:
+            break
+        sigma, f, p = lower, trial, -trial.solve(g)
+    return sigma, f, p
 
 
 def _model_of(h, shift):

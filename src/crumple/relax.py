@@ -51,6 +51,15 @@ ACCURATE_STABILITY = True
 #: a converged stage at N = 10⁴).
 CURVED_STEPS = False
 
+#: Opt-in (False: the default engine): where the exact Hessian is indefinite the step is that
+#: of the exact Hessian shifted by σM, not of the Hessian with its contact blocks projected
+#: (which is too stiff along a slide of pressed turns). Meant with ``minimize.SHIFT_DESCENTS``
+#: = 4, which then lowers σ while the step stays inside the trust radius. Measured
+#: (docs/performance.md, "Exact fallback"): the N = 2000 continuum ramp 2587 → 1287 iterations,
+#: its last stage 967 → 249, 44/44; the default N = 100 ramp unchanged (~730), with ~2.7 instead
+#: of ~1.5 factorisations per iteration. Off until the full reproduction has been run with it.
+EXACT_FALLBACK = False
+
 Method = Literal["newton", "powell"]
 
 #: Powell: the longest move of a node in one line search, in segment lengths (the interval its
@@ -172,7 +181,9 @@ def minimize_wire(
             hess=energy.hessian_csc,
             # contacts projected on their positive part; bending and stretching exact (measured:
             # projecting the joints too doubled the iterations of the default ramp)
-            hess_fallback=lambda x: energy.hessian_csc(x, project_contacts=True),
+            hess_fallback=energy.hessian_csc
+            if EXACT_FALLBACK
+            else (lambda x: energy.hessian_csc(x, project_contacts=True)),
             ftol=ftol,
             maxiter=maxiter,
             max_step=max_step,
