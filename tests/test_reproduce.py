@@ -5,9 +5,9 @@ node at a few points) once per session (the ``smoke`` fixture, tests/conftest.py
 that every figure file and every table row of the report exists, and that its
 ``results.json`` equals the golden file ``tests/data/smoke_results.json`` number for
 number (exact equality: a refactor must not move a bit) on the NumPy, SciPy and Numba versions
-the file records (``made_with``; on others only the report's layout is compared). When a change
-to the physics moves the numbers on purpose, or those versions change, regenerate the golden
-file and say why in the commit::
+and the CPU code paths the file records (``made_with``; elsewhere only the report's layout is
+compared). When a change to the physics moves the numbers on purpose, or the reference machine
+changes, regenerate the golden file and say why in the commit::
 
     CRUMPLE_UPDATE_GOLDEN=1 python -m pytest tests/test_reproduce.py -k golden
 """
@@ -265,9 +265,20 @@ def test_kink_ratio_sees_a_kink_anywhere():
 
 #: The libraries whose round-off the golden numbers are bit for bit on: a contact stage of the
 #: smoke profile is a snap-through whose branch can turn on one ulp, so another NumPy, SciPy or
-#: Numba moves numbers (measured: numpy 2.4.6, scipy 1.17.1, numba 0.68.1 against the file
-#: made before them moved 508 of them, an α by 0.4σ; docs/reproduction.md, "Library versions").
+#: Numba, or the same ones on another CPU, moves numbers (measured: the same numpy 2.4.6, scipy
+#: 1.17.1 and numba 0.68.1 on two machines moved 508 of them, an α by 0.45σ, no verdict;
+#: docs/reproduction.md, "Library versions and the machine").
 PINNED = ("numpy", "scipy", "numba")
+
+
+def _machine() -> dict:
+    """The code paths the libraries chose on this CPU: the CPU Numba compiles for and the
+    kernels OpenBLAS dispatched to (the smoke run's workers are processes on this machine)."""
+    import llvmlite.binding as ll
+    from threadpoolctl import threadpool_info
+
+    blas = sorted({str(i.get("architecture")) for i in threadpool_info() if "architecture" in i})
+    return {"numba_cpu": ll.get_host_cpu_name(), "blas": ",".join(blas)}
 
 
 def _golden_view(results: dict) -> dict:
@@ -289,13 +300,14 @@ def _layout(results: dict) -> dict:
 def test_smoke_results_match_the_golden_file(smoke):
     """Every number of the smoke report, bit for bit (results.json writes NaN as null, and
     JSON floats round-trip exactly, so == is exact equality) where NumPy, SciPy and Numba are
-    the versions the golden file was made with; with others only the report's layout is
-    compared, and the test skips the numbers, saying so. See the module docstring to
+    the versions the golden file was made with, on a CPU where they take the same code paths
+    (:func:`_machine`); elsewhere only the report's layout is compared, and the test skips
+    the numbers, saying so. See the module docstring to
     regenerate."""
     out, _, _ = smoke
     results = json.loads((out / "results.json").read_text())
     got = _golden_view(results)
-    made_with = {k: results["versions"][k] for k in PINNED}
+    made_with = {**{k: results["versions"][k] for k in PINNED}, **_machine()}
     if os.environ.get("CRUMPLE_UPDATE_GOLDEN"):
         GOLDEN.parent.mkdir(exist_ok=True)
         body = {**got, "made_with": made_with}
