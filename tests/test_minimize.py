@@ -1310,3 +1310,29 @@ def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_ra
     assert abs(p2[1]) > 10 * abs(p[1])  # a longer step along the soft direction
     tight = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=2e-4)
     assert mz._lower_shift(tight, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
+
+
+@pytest.mark.parametrize("fixed", [None, np.array([False, False, False, True])])
+def test_an_exact_fallback_reuses_the_hessian_it_has_just_evaluated(fixed):
+    """``hess_fallback=hess`` (the very object, as ``relax.EXACT_FALLBACK`` passes it): where
+    the exact Hessian is indefinite its shifted factor is the fallback, with no second
+    evaluation at the same point. The iterates are those of an equal function passed as a
+    distinct object, which is evaluated again; fixed entries keep the reuse."""
+    calls = {"same": 0, "other": 0}
+
+    def counted(key):
+        def hess(x):
+            calls[key] += 1
+            return sp.csc_matrix(rosen_hess(x))
+
+        return hess
+
+    x0 = np.array([-1.2, 1.0, -0.5, 0.8])
+    same = counted("same")
+    a = newton(rosenbrock, x0, hess=same, hess_fallback=same, ftol=1e-9, fixed=fixed)
+    other = counted("other")
+    b = newton(rosenbrock, x0, hess=other, hess_fallback=counted("other"), ftol=1e-9,
+               fixed=fixed)  # fmt: skip
+    assert a.converged and b.converged
+    assert np.array_equal(a.x, b.x) and a.iterations == b.iterations
+    assert a.hessian_evaluations == calls["same"] < calls["other"] == b.hessian_evaluations

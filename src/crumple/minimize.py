@@ -400,8 +400,14 @@ def _constrained(mask, fun, hess, hess_fallback):
         h[mask, mask] = 1.0
         return h
 
-    fallback = None if hess_fallback is None else (lambda x: chess(hess_fallback(x)))
-    return cfun, (lambda x: chess(hess(x))), fallback
+    def chessian(x):
+        return chess(hess(x))
+
+    if hess_fallback is None or hess_fallback is hess:  # the exact one: still the same object
+        fallback = None if hess_fallback is None else chessian
+    else:
+        fallback = lambda x: chess(hess_fallback(x))  # noqa: E731
+    return cfun, chessian, fallback
 
 
 @dataclass(slots=True)
@@ -447,6 +453,7 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
     """
     g = st.g.ravel()
     w = None  # the zero modes at x, evaluated once per direction
+    h = None  # the exact Hessian at x, where it was evaluated
     if st.skip_left > 0:
         st.skip_left -= 1
     else:
@@ -467,8 +474,9 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         if hess_fallback is not None:
             st.skip = min(max(1, 2 * st.skip), SKIP_MAX)
             st.skip_left = st.skip
-    h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
-    st.nhev += 1
+    if h is None or (hess_fallback is not None and hess_fallback is not hess):
+        h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
+        st.nhev += 1
     st.exact = False
     hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
     if w is None and st.zero_modes is not None:

@@ -175,13 +175,15 @@ def minimize_wire(
         return (radius is None or _inside(x, radius)) and not _has_crossings(x)
 
     if method == "newton":
+        hess = energy.hessian_csc  # one bound method: the fallback below is this very object
         return newton(
             energy,
             x0,
-            hess=energy.hessian_csc,
+            hess=hess,
             # contacts projected on their positive part; bending and stretching exact (measured:
-            # projecting the joints too doubled the iterations of the default ramp)
-            hess_fallback=energy.hessian_csc
+            # projecting the joints too doubled the iterations of the default ramp). The exact
+            # fallback is `hess` itself, so the minimiser reuses the H it has just evaluated.
+            hess_fallback=hess
             if EXACT_FALLBACK
             else (lambda x: energy.hessian_csc(x, project_contacts=True)),
             ftol=ftol,
