@@ -13,7 +13,7 @@
     python benchmarks/bench_scale.py accurate [N …]  # default ramp, relax.ACCURATE_STABILITY on/off
     python benchmarks/bench_scale.py curved [N …] [seeds=0,1]  # default ramps, curved steps off/on
     python benchmarks/bench_scale.py crawl [N] [seed=] [stage=]  # one stage: what limits its steps
-    python benchmarks/bench_scale.py exact [N …] [seeds=0,1]  # opt-in exact fallback: off / on
+    python benchmarks/bench_scale.py fallback [N …] [seeds=0,1]  # projected / exact fallback
 
 CPU time is ``time.process_time`` (one BLAS thread, as the ramps run), deterministic counts are
 printed next to it. The landed engine is the frozen copy ``benchmarks/legacy_newton.py``.
@@ -450,35 +450,37 @@ def _curved_ramps(wire, seeds, on):
 
 
 def bench_exact(ns=(100, 2000), seeds=(0,)):
-    """The opt-in exact fallback with the σ search (``relax.EXACT_FALLBACK``,
-    ``minimize.SHIFT_DESCENTS`` = 4) off and on, default ramp, same process: the paper's wire
-    at N = 100 and the continuum wire at every other N of ``ns``, over ``seeds``. Per ramp:
-    iterations, factorisations per iteration, the last stage's iterations, stages converged,
-    CPU, the final energy (which branch the ramp ended on)."""
-    import crumple.minimize as mz
-    import crumple.relax as relax
+    """The two fallbacks of Newton's step where the Hessian is indefinite
+    (``Ramp(fallback="projected")`` and ``"exact"``, the latter with the σ search;
+    ``relax.FALLBACK``), default ramp of the continuum wire (at N = 100 the paper's wire),
+    same process. Per ramp: iterations, factorisations and Hessian evaluations per iteration,
+    the last stage's iterations, stages converged, CPU (and per iteration), the final energy
+    (which branch the ramp ended on). "auto", the default, is the second above
+    ``relax.EXACT_FALLBACK_ABOVE`` segments and the first below."""
+    from crumple import relax
 
     run_ramp(Wire(k_b=5, k_s=5e5), Ramp(lambdas=(1.0, 100.0, 1000.0)), seed=0)  # compile
     with threadpool_limits(limits=1, user_api="blas"):
         for n in ns:
-            wire = Wire(k_b=5, k_s=5e5) if n == 100 else continuum_wire(n)
-            print(f"== N = {n}, default schedule, seeds {list(seeds)}: exact fallback off / on ==")
-            for on in (False, True):
-                relax.EXACT_FALLBACK, mz.SHIFT_DESCENTS = on, (4 if on else 0)
-                try:
-                    for seed in seeds:
-                        r, t = cpu(lambda seed=seed, wire=wire: run_ramp(wire, seed=seed))
-                        res = [s.result for s in r.stages]
-                        its = sum(x.iterations for x in res)
-                        fac = sum(x.factorizations for x in res)
-                        e = r.stages[-1].energy.total
-                        print(f"  {'on ' if on else 'off'} seed {seed}: {its:6d} iterations, "
-                              f"{fac / its:.2f} factorisations each, last stage "
-                              f"{res[-1].iterations}, {sum(x.converged for x in res)}/{len(res)} "
-                              f"converged, {t:7.1f} s CPU, "
-                              f"E_final = {e:.10f}", flush=True)  # fmt: skip
-                finally:
-                    relax.EXACT_FALLBACK, mz.SHIFT_DESCENTS = False, 0
+            wire = continuum_wire(n)
+            auto = relax.resolve_fallback("auto", wire)
+            print(f"== N = {n}, default schedule, seeds {list(seeds)}: projected / exact fallback "
+                  f"(auto: {auto}) ==")  # fmt: skip
+            for fallback in ("projected", "exact"):
+                for seed in seeds:
+                    ramp = Ramp(fallback=fallback)
+                    r, t = cpu(
+                        lambda seed=seed, wire=wire, ramp=ramp: run_ramp(wire, ramp, seed=seed)
+                    )
+                    res = [s.result for s in r.stages]
+                    its = sum(x.iterations for x in res)
+                    fac = sum(x.factorizations for x in res)
+                    hev = sum(x.hessian_evaluations for x in res)
+                    print(f"  {fallback:9s} seed {seed}: {its:6d} iterations, {fac / its:.2f} "
+                          f"factorisations and {hev / its:.2f} Hessians each, last stage "
+                          f"{res[-1].iterations}, {sum(x.converged for x in res)}/{len(res)} "
+                          f"converged, {t:7.1f} s CPU ({1e3 * t / its:.2f} ms/it), "
+                          f"E_final = {r.stages[-1].energy.total:.10f}", flush=True)  # fmt: skip
 
 
 def bench_crawl(n: int = 10_000, seed: int = 0, stage: int = 43, curved=None):
@@ -592,7 +594,7 @@ if __name__ == "__main__":
         seeds = [a for a in sys.argv[2:] if a.startswith("seeds=")]
         big = tuple(int(v) for v in seeds[0][6:].split(",")) if seeds else (0,)
         bench_curved([int(v) for v in sys.argv[2:] if not v.startswith("seeds=")], big_seeds=big)
-    elif what == "exact":  # exact [N …] [seeds=0,1]
+    elif what in ("fallback", "exact"):  # fallback [N …] [seeds=0,1]
         seeds = [a for a in sys.argv[2:] if a.startswith("seeds=")]
         ss = tuple(int(v) for v in seeds[0][6:].split(",")) if seeds else (0,)
         bench_exact([int(v) for v in sys.argv[2:] if not v.startswith("seeds=")] or (100, 2000), ss)

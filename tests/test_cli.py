@@ -342,6 +342,16 @@ def test_run_curved_steps_flag_reaches_the_stored_ramp(capsys, tmp_path, flag):
     assert load_ramps(tmp_path / "o" / "ramps.h5")[0].ramp.curved_steps is on
 
 
+@pytest.mark.parametrize("choice", ["exact", "projected"])
+def test_run_fallback_flag_reaches_the_stored_ramp(capsys, tmp_path, choice):
+    code, out, err = run_cli(capsys, "run", "--out", tmp_path / "o", "--n-segments", 20,
+                             "--lambdas", "1,10", "--workers", 1, "--fallback", choice)  # fmt: skip
+    assert code == 0, err
+    assert json.loads(out)["ramp"]["fallback"] == choice
+    assert f"fallback = {choice}" in err
+    assert load_ramps(tmp_path / "o" / "ramps.h5")[0].ramp.fallback == choice
+
+
 def test_help_shows_defaults_and_units(capsys):
     for cmd in ("run", "energy", "measure", "export", "plot", "animate"):
         with pytest.raises(SystemExit):

@@ -1286,16 +1286,13 @@ def test_all_finite_is_numpys_isfinite_all(values, two_d, strided):
     assert all_finite(a.tolist()) == bool(np.isfinite(a).all())
 
 
-def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_radius(
-    monkeypatch,
-):
-    """The opt-in σ search (``minimize.SHIFT_DESCENTS``): from an overshooting σ = 1 on
+def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_radius():
+    """The σ search (``newton(shift_descents=4)``, the exact fallback's): from an overshooting σ = 1 on
     H = diag(1, -0.01) it divides by 4 while H + σ stays positive definite (1/4, 1/16, 1/64;
     1/256 < 0.01 is not) and the step stays below radius / 4; a small radius keeps σ."""
     from crumple import minimize as mz
     from crumple.linalg import LDLT
 
-    monkeypatch.setattr(mz, "SHIFT_DESCENTS", 4)
     h = sp.csc_matrix(np.diag([1.0, -0.01]))
     g = np.array([0.0, -1e-4])
     m = np.ones(2)
@@ -1303,13 +1300,15 @@ def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_ra
     ldl = LDLT()
     f = ldl.factorize(h, shift=1.0 * m, floor=floor)
     p = -f.solve(g)
-    wide = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0)
+    wide = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0, descents=4)
     sigma, f2, p2 = mz._lower_shift(wide, ldl, h, g, m, 0.0, floor, 1.0, f, p)
     assert sigma == 1.0 / 64 and f2.positive_definite
     assert np.allclose((h.toarray() + sigma * np.eye(2)) @ p2, -g)
     assert abs(p2[1]) > 10 * abs(p[1])  # a longer step along the soft direction
-    tight = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=2e-4)
+    tight = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=2e-4, descents=4)
     assert mz._lower_shift(tight, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
+    off = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0)  # the projected one's
+    assert mz._lower_shift(off, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
 
 
 @pytest.mark.parametrize("fixed", [None, np.array([False, False, False, True])])

@@ -233,18 +233,19 @@ def test_curved_steps_keep_a_contact_ramp_at_true_equilibria(monkeypatch):
     assert r.converged and r.curved_steps == 0
 
 
-def test_exact_fallback_keeps_a_contact_ramp_at_true_equilibria(monkeypatch):
-    """The opt-in exact fallback with the σ search (``relax.EXACT_FALLBACK``,
-    ``minimize.SHIFT_DESCENTS``): a contact ramp still ends every stage converged and stable,
-    never crossing, no accepted step raising the energy, and it does factorise more (the σ
-    search) than the default engine."""
-    import crumple.minimize as mz
-
+def test_exact_fallback_keeps_a_contact_ramp_at_true_equilibria():
+    """The exact fallback with the σ search (``Ramp(fallback="exact")``, the default above
+    ``relax.EXACT_FALLBACK_ABOVE`` segments) at N = 100: a contact ramp still ends every stage
+    converged and stable, never crossing, no accepted step raising the energy, and it does
+    factorise more (the σ search) than the projected fallback, N = 100's default."""
     wire, lams = Wire(k_b=5, k_s=5e5), (1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0)
     off = run_ramp(wire, Ramp(lambdas=lams), seed=2)
-    monkeypatch.setattr(relax, "EXACT_FALLBACK", True)
-    monkeypatch.setattr(mz, "SHIFT_DESCENTS", 4)
-    on, audit = audited_ramp(wire, Ramp(lambdas=lams), seed=2)
+    assert Ramp(lambdas=lams).fallback == "auto"
+    assert [s.result.iterations for s in off.stages] == [
+        s.result.iterations for s in run_ramp(wire, Ramp(lambdas=lams, fallback="projected"),
+                                              seed=2).stages
+    ]  # fmt: skip
+    on, audit = audited_ramp(wire, Ramp(lambdas=lams, fallback="exact"), seed=2)
     assert on.converged and not audit.violations, audit.violations[:5]
     assert on.stages[-1].energy.hard_core > 0
     assert_stage_bookkeeping(on)
@@ -434,6 +435,8 @@ def test_at_unknown_lambda_raises():
         ({"max_step": -1.0}, "max_step"),
         ({"curved_steps": "yes"}, "curved_steps"),
         ({"curved_steps": True, "method": "powell"}, "curved_steps"),
+        ({"fallback": "modified"}, "fallback"),
+        ({"fallback": "exact", "method": "powell"}, "fallback"),
     ],
 )
 def test_ramp_validation(kwargs, word):
@@ -700,3 +703,26 @@ def test_accurate_stability_is_unused_where_the_assembled_hessian_resolves_tau(m
     for a, b in zip(off, on, strict=True):
         assert a.converged and b.converged
         assert a.iterations == b.iterations and np.array_equal(a.x, b.x)
+
+
+def test_the_fallback_enters_the_run_id_as_the_path_the_run_takes(monkeypatch):
+    """ "auto" is resolved by the wire's size (``relax.resolve_fallback``): at N <= 1000 it is
+    the projected fallback, the runs before the choice existed, so their ids are unchanged
+    (a ramp dict without the key means "projected"); above, it is "exact", and the id says so.
+    The module default is resolved when the Ramp is made, like ``curved_steps``."""
+    from crumple.sweep.store import run_id
+
+    small, big = Wire(k_b=5, k_s=5e5, n_segments=1000), Wire(k_b=5, k_s=5e5, n_segments=1001)
+    ramps = {f: Ramp(lambdas=(1, 10), fallback=f) for f in ("auto", "projected", "exact")}
+    legacy = Ramp.from_dict({k: v for k, v in ramps["auto"].to_dict().items()
+                             if k != "fallback"})  # fmt: skip
+    ids = {f: run_id(small, r, 0, 0) for f, r in ramps.items()}
+    assert ids["auto"] == ids["projected"] == run_id(small, legacy, 0, 0) != ids["exact"]
+    ids = {f: run_id(big, r, 0, 0) for f, r in ramps.items()}
+    assert ids["auto"] == ids["exact"] != ids["projected"]
+    assert relax.resolve_fallback("auto", small) == "projected"
+    assert relax.resolve_fallback("auto", big) == "exact"
+    monkeypatch.setattr(relax, "FALLBACK", "exact")
+    assert Ramp(lambdas=(1, 10)).fallback == "exact" and Ramp(method="powell").fallback == "auto"
+    with pytest.raises(ValueError, match="fallback"):
+        relax.minimize_wire(small, np.zeros((small.n_nodes, 2)), 1.0, fallback="modified")

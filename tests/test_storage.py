@@ -48,6 +48,19 @@ def test_a_file_from_before_the_curved_steps_switch_reads_as_straight_steps(tmp_
     assert all(r.ramp.curved_steps is False for r in load_ramps(path))
 
 
+def test_a_file_from_before_the_fallback_choice_reads_as_the_projected_fallback(tmp_path, results):
+    """Files written before ``Ramp.fallback`` existed took the projected fallback at every N,
+    whatever "auto" resolves to now; the key, once written, is read back as written."""
+    exact = [replace(r, ramp=replace(r.ramp, fallback="exact")) for r in results]
+    path = save_ramps(tmp_path / "r.h5", exact, seed=3)
+    assert all(r.ramp.fallback == "exact" for r in load_ramps(path))
+    with h5py.File(path, "r+") as f:
+        ramp = json.loads(f.attrs["ramp"])
+        del ramp["fallback"]
+        f.attrs["ramp"] = json.dumps(ramp)
+    assert all(r.ramp.fallback == "projected" for r in load_ramps(path))
+
+
 def test_file_is_plain_hdf5_with_parameters_as_attributes(tmp_path, results):
     path = save_ramps(tmp_path / "r.h5", results, seed=3)
     with h5py.File(path, "r") as f:  # read with h5py alone, as any user would

@@ -83,6 +83,7 @@ def newton(
     barriers: Callable[[np.ndarray, np.ndarray], tuple] | None = None,
     hess_action: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
+    shift_descents: int | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -196,6 +197,10 @@ def newton(
         evaluates x' and takes, of x + αp and x', the lower energy of those that pass the same
         tests (Armijo on the slope gᵀp, ``step_limit`` on the whole chord x' - x, ``feasible``).
         Not with ``fixed``: a curve need not keep the fixed rows.
+    shift_descents : int, optional
+        The fallback's search for σ: once σM makes it positive definite, divide σ by
+        ``SHIFT_DESCENT`` up to this many times while the step stays inside the trust radius
+        over ``SHIFT_ROOM`` and the factor positive definite. Default :data:`SHIFT_DESCENTS`.
 
     Returns
     -------
@@ -230,6 +235,7 @@ def newton(
     st.radius = math.inf if max_step is None else float(max_step)
     st.zero_modes = zero_modes
     st.hess_action = hess_action
+    st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -438,6 +444,7 @@ class _State:
     refine: bool = False  # forces below their resolution but a Newton step still pays: go on
     refine_note: str = ""
     curved: int = 0  # accepted steps that were the retracted (curved) point
+    descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
@@ -488,7 +495,7 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
         f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor, trial=attempt < SHIFTS - 1)
         if f.modified == 0:
             p = -f.solve(g)
-            if SHIFT_DESCENTS and sigma > 0.0:
+            if st.descents and sigma > 0.0:
                 sigma, f, p = _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p)
             st.sigma = sigma
             st.factor, st.model = f, _model_of(hs, sigma * m + pin)
@@ -502,12 +509,12 @@ def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
 
 
 def _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p):
-    """The shift lowered, by ``SHIFT_DESCENT`` at a time and ``SHIFT_DESCENTS`` times at most,
+    """The shift lowered, by ``SHIFT_DESCENT`` at a time and ``st.descents`` times at most,
     while the shifted step stays well inside the trust radius (its largest row displacement
     below ``st.radius / SHIFT_ROOM``) and the lowered matrix is still positive definite: a
     trust-region search for σ, which the doubling from half the last σ only overshoots.
     Returns (σ, its factor, its step)."""
-    for _ in range(SHIFT_DESCENTS):
+    for _ in range(st.descents):
         if not max_force(p.reshape(st.x.shape)) * SHIFT_ROOM < st.radius:
             break
         lower = sigma / SHIFT_DESCENT

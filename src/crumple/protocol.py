@@ -132,6 +132,11 @@ class Ramp:
         contact acts (:func:`crumple.relax.minimize_wire`). Default (None): resolved here to
         :data:`crumple.relax.CURVED_STEPS` for Newton, so that ``to_dict``, the run id and the
         sweep workers hold the switch; always False for Powell.
+    fallback : {"auto", "projected", "exact"} or None
+        Newton only: its step where the exact Hessian is indefinite. Default (None): resolved
+        here to :data:`crumple.relax.FALLBACK`, "auto": the exact Hessian shifted for wires of
+        more than :data:`crumple.relax.EXACT_FALLBACK_ABOVE` segments, the contact-projected
+        one below (measured; docs/performance.md, "The fallback by size"); "auto" for Powell.
 
     Examples
     --------
@@ -153,6 +158,7 @@ class Ramp:
     max_step: float = 0.5
     powell_rtol: float | None = None
     curved_steps: bool | None = None
+    fallback: str | None = None
 
     def __post_init__(self):
         if self.maxiter is None and self.method in DEFAULT_MAXITER:
@@ -164,6 +170,15 @@ class Ramp:
         object.__setattr__(self, "curved_steps", bool(self.curved_steps))
         if self.curved_steps and self.method != "newton":
             raise ValueError("curved_steps is a parameter of method='newton' only")
+        if self.fallback is None:
+            object.__setattr__(
+                self, "fallback", relax.FALLBACK if self.method == "newton" else "auto"
+            )
+        if self.fallback not in relax.FALLBACKS:
+            raise ValueError(f"fallback must be one of {', '.join(relax.FALLBACKS)}; got "
+                             f"{self.fallback!r}")  # fmt: skip
+        if self.fallback != "auto" and self.method != "newton":
+            raise ValueError("fallback is a parameter of method='newton' only")
         if self.method == "powell" and self.powell_rtol is None:
             object.__setattr__(self, "powell_rtol", POWELL_RTOL)
         if self.method != "powell" and self.powell_rtol is not None:
@@ -367,6 +382,7 @@ def _run_ramp(wire, ramp, rng, progress):
             rest_angles=rest,
             rtol=ramp.powell_rtol,
             curved_steps=ramp.curved_steps,
+            fallback=ramp.fallback if ramp.method == "newton" else None,
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x

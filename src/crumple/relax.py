@@ -51,14 +51,23 @@ ACCURATE_STABILITY = True
 #: a converged stage at N = 10⁴).
 CURVED_STEPS = False
 
-#: Opt-in (False: the default engine): where the exact Hessian is indefinite the step is that
-#: of the exact Hessian shifted by σM, not of the Hessian with its contact blocks projected
-#: (which is too stiff along a slide of pressed turns). Meant with ``minimize.SHIFT_DESCENTS``
-#: = 4, which then lowers σ while the step stays inside the trust radius. Measured
-#: (docs/performance.md, "Exact fallback"): the N = 2000 continuum ramp 2587 → 1287 iterations,
-#: its last stage 967 → 249, 44/44; the default N = 100 ramp unchanged (~730), with ~2.7 instead
-#: of ~1.5 factorisations per iteration. Off until the full reproduction has been run with it.
-EXACT_FALLBACK = False
+#: Newton's step where the exact Hessian H is indefinite (``minimize_wire(fallback=...)``):
+#: "projected", the Hessian with its contact blocks projected on their positive part, shifted
+#: by σM; "exact", H itself shifted by σM, with σ then searched downwards while the step stays
+#: inside the trust radius (``minimize.newton(shift_descents=EXACT_SHIFT_DESCENTS)``); "auto",
+#: "exact" for wires of more than :data:`EXACT_FALLBACK_ABOVE` segments, else "projected".
+#: The projected Hessian is too stiff along a slide of pressed turns, and that costs more as
+#: contacts multiply with N. Measured on the default ramp of the continuum wire (seed 0;
+#: docs/performance.md, "The fallback by size"): iterations 725 → 765 (N = 100), 1197 → 977
+#: (300), 1862 → 1143 (1000), 2544 → 1402 (2000), 6371 → 1893 (10⁴), every stage converged
+#: and stable; CPU about equal at N ≤ 1000 and 1.2–4× less above. The threshold keeps every
+#: ramp of the reproduction and of the continuum study (N ≤ 1000) on the branches it has
+#: always reached, bit for bit: both fallbacks reach true minima, only which snap-through
+#: branch differs.
+FALLBACK = "auto"
+EXACT_FALLBACK_ABOVE = 1000
+EXACT_SHIFT_DESCENTS = 4
+FALLBACKS = ("auto", "projected", "exact")
 
 Method = Literal["newton", "powell"]
 
@@ -87,6 +96,7 @@ def minimize_wire(
     rtol: float | None = None,
     anticipate_contacts: bool = True,
     curved_steps: bool | None = None,
+    fallback: str | None = None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -138,6 +148,10 @@ def minimize_wire(
         Only at points where no contact acts. Default :data:`CURVED_STEPS` (off); never with
         fixed nodes. Like ``anticipate_contacts`` it
         changes the path, not the criteria (docs/performance.md, "Curved steps").
+    fallback : {"auto", "projected", "exact"}, optional
+        Newton: the step where the exact Hessian is indefinite (:data:`FALLBACK`, the default,
+        says what each is and what was measured). Like ``curved_steps``, it changes the path,
+        not the criteria.
 
     Examples
     --------
@@ -147,6 +161,7 @@ def minimize_wire(
     >>> r.converged
     True
     """
+    exact = resolve_fallback(fallback, wire) == "exact"
     energy = WireEnergy(wire, lam, rest_angles=rest_angles)
     x0 = np.array(positions, dtype=np.float64)
     if x0.shape != (wire.n_nodes, 2):
@@ -184,8 +199,9 @@ def minimize_wire(
             # projecting the joints too doubled the iterations of the default ramp). The exact
             # fallback is `hess` itself, so the minimiser reuses the H it has just evaluated.
             hess_fallback=hess
-            if EXACT_FALLBACK
+            if exact
             else (lambda x: energy.hessian_csc(x, project_contacts=True)),
+            shift_descents=EXACT_SHIFT_DESCENTS if exact else 0,
             ftol=ftol,
             maxiter=maxiter,
             max_step=max_step,
@@ -220,6 +236,22 @@ def minimize_wire(
             reach=reach,
         )
     raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
+
+
+def resolve_fallback(fallback: str | None, wire: Wire) -> str:
+    """``fallback`` (None: :data:`FALLBACK`) as "projected" or "exact" for ``wire``.
+
+    >>> resolve_fallback("auto", Wire(k_b=5, k_s=5e5, n_segments=100))
+    'projected'
+    >>> resolve_fallback(None, Wire(k_b=5, k_s=5e5, n_segments=2000))
+    'exact'
+    """
+    fallback = FALLBACK if fallback is None else fallback
+    if fallback not in FALLBACKS:
+        raise ValueError(f"fallback must be one of {', '.join(FALLBACKS)}; got {fallback!r}")
+    if fallback == "auto":
+        return "exact" if wire.n_segments > EXACT_FALLBACK_ABOVE else "projected"
+    return fallback
 
 
 def _curved_retraction(energy: WireEnergy):

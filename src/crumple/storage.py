@@ -398,6 +398,7 @@ def load_ramps(path) -> list[RampResult]:
         wire = Wire.from_dict(json.loads(f.attrs["wire"]))
         ramp = json.loads(f.attrs["ramp"])
         ramp.setdefault("curved_steps", False)  # a file from before the switch: straight steps
+        ramp.setdefault("fallback", "projected")  # from before the choice: always projected
         ramp = Ramp.from_dict(ramp)
         lams = f["lambda"][()]
         pos = f["positions"][()]

@@ -50,7 +50,7 @@ _WIRE_KEYS = {
 }
 _RAMP_KEYS = (
     "initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step",
-    "curved_steps",
+    "curved_steps", "fallback",
 )  # fmt: skip
 _RUN_KEYS = ("replicas", "seed", "workers", "out", "figure_lambdas", "overwrite")
 #: The tables of a run's TOML file ([protocol]: kind = "ramp" | "injection", and the
@@ -69,7 +69,7 @@ _UNITS = {
     "stop_tol": "[length]",
     "initial_noise": "[segment lengths]",
     "stage_noise": "[segment lengths]",
-    "max_step": "[segment lengths]",
+    "max_step": "[length]",
 }
 
 
@@ -567,6 +567,12 @@ def register(sub) -> None:
         action=argparse.BooleanOptionalAction,
         help="Newton: also try curved trial points where no contact acts "
         "(default: crumple.relax.CURVED_STEPS)",
+    )
+    p.add_argument(
+        "--fallback",
+        choices=["auto", "projected", "exact"],
+        help="Newton: the step where the Hessian is indefinite (default auto: exact above "
+        "1000 segments, contact-projected below)",
     )
     p.add_argument(
         "--overwrite",

@@ -82,7 +82,15 @@ def _injection(args, cfg: dict):
     for key in _SHARED:
         if getattr(args, key) is not None:
             table[key] = getattr(args, key)
-    for key in ("initial_noise", "stage_noise", "stop_tol", "lambdas", "method", "curved_steps"):
+    for key in (
+        "initial_noise",
+        "stage_noise",
+        "stop_tol",
+        "lambdas",
+        "method",
+        "curved_steps",
+        "fallback",
+    ):
         if getattr(args, key) is not None:
             raise CLIError(f"--{key.replace('_', '-')} is a ramp flag, not an injection's")
     return Injection.from_dict(table)

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..model import Wire
 from ..protocol import Ramp, replica_seeds, run_ramp
+from ..relax import resolve_fallback
 from ..storage import atomic_write_text, verify_ramps, versions
 
 if TYPE_CHECKING:  # the manifest describes a Sweep; spec imports this module
@@ -114,7 +115,8 @@ def run_id(wire: Wire, ramp: Ramp, replica: int, seed: int) -> str:
 ID_NEUTRAL = MappingProxyType(
     {
         "wire": {"rest_angle_sd": 0.0, "cavity_radius": None},
-        "ramp": {"powell_rtol": None, "curved_steps": False},
+        # "auto" enters the id as what it resolves to for the wire (_canonical_params)
+        "ramp": {"powell_rtol": None, "curved_steps": False, "fallback": "projected"},
     }
 )
 
@@ -127,7 +129,12 @@ def _is_injection(protocol) -> bool:
 def _canonical_params(wire: Wire, ramp: Ramp) -> tuple[dict, dict]:
     # cached: the replicas of a point share their wire and ramp (read-only results)
     out = []
-    for table, params in (("wire", wire.to_dict()), ("ramp", ramp.to_dict())):
+    rd = ramp.to_dict()
+    if rd.get("fallback") == "auto":  # the path the run takes; Powell has no fallback
+        rd["fallback"] = resolve_fallback("auto", wire) if rd.get("method") == "newton" else None
+        if rd["fallback"] is None:
+            del rd["fallback"]
+    for table, params in (("wire", wire.to_dict()), ("ramp", rd)):
         neutral = ID_NEUTRAL[table] if not _is_injection(ramp) or table == "wire" else {}
         out.append(_canonical({k: v for k, v in params.items()
                                if not (k in neutral and v == neutral[k])}))  # fmt: skip
