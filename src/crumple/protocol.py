@@ -382,7 +382,7 @@ def _run_ramp(wire, ramp, rng, progress):
             rest_angles=rest,
             rtol=ramp.powell_rtol,
             curved_steps=ramp.curved_steps,
-            fallback=ramp.fallback if ramp.method == "newton" else None,
+            fallback=ramp.fallback,
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x

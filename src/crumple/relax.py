@@ -59,7 +59,7 @@ CURVED_STEPS = False
 #: The projected Hessian is too stiff along a slide of pressed turns, and that costs more as
 #: contacts multiply with N. Measured on the default ramp of the continuum wire (seed 0;
 #: docs/performance.md, "The fallback by size"): iterations 725 → 765 (N = 100), 1197 → 977
-#: (300), 1862 → 1143 (1000), 2544 → 1402 (2000), 6371 → 1893 (10⁴), every stage converged
+#: (300), 1862 → 1143 (1000), 2544 → 1402 (2000), 6490 → 1893 (10⁴), every stage converged
 #: and stable; CPU about equal at N ≤ 1000 and 1.2–4× less above. The threshold keeps every
 #: ramp of the reproduction and of the continuum study (N ≤ 1000) on the branches it has
 #: always reached, bit for bit: both fallbacks reach true minima, only which snap-through

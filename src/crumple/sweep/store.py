@@ -130,10 +130,10 @@ def _canonical_params(wire: Wire, ramp: Ramp) -> tuple[dict, dict]:
     # cached: the replicas of a point share their wire and ramp (read-only results)
     out = []
     rd = ramp.to_dict()
-    if rd.get("fallback") == "auto":  # the path the run takes; Powell has no fallback
-        rd["fallback"] = resolve_fallback("auto", wire) if rd.get("method") == "newton" else None
-        if rd["fallback"] is None:
-            del rd["fallback"]
+    if rd.get("fallback") == "auto" and rd.get("method") == "newton":
+        rd["fallback"] = resolve_fallback("auto", wire)  # the path the run takes
+    elif rd.get("fallback") == "auto":  # Powell has no fallback
+        del rd["fallback"]
     for table, params in (("wire", wire.to_dict()), ("ramp", rd)):
         neutral = ID_NEUTRAL[table] if not _is_injection(ramp) or table == "wire" else {}
         out.append(_canonical({k: v for k, v in params.items()
