@@ -525,7 +525,8 @@ class WireEnergy:
             x, np.ascontiguousarray(step, dtype=np.float64).reshape(x.shape), ks, js, w.hard_core,
             BARRIER_MARGIN,
         )  # fmt: skip
-        stiffness = np.full(offset.shape[0], 2.0 * w.hard_core_energy / w.hard_core**2)
+        stiffness = np.empty(offset.shape[0])
+        stiffness.fill(2.0 * w.hard_core_energy / w.hard_core**2)
         return index, value, offset, stiffness
 
 

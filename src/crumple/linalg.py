@@ -568,7 +568,7 @@ class LDLT:
         n = s.n
         lx = np.empty(s.l_nnz)
         d = np.empty(n)
-        first = np.full(1, -1, dtype=np.int64)
+        first = np.array([-1], dtype=np.int64)
         neg, mod = _factor_permuted(
             s.src, np.ascontiguousarray(a.data, dtype=np.float64), s.perm,
             _EMPTY if shift is None else np.ascontiguousarray(shift, dtype=np.float64),

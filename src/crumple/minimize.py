@@ -42,7 +42,7 @@ from .minimize_accurate import (
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
-from .minimize_result import MinimizeResult, _validate_common, all_finite, max_force
+from .minimize_result import MinimizeResult, _equal, _validate_common, all_finite, max_force
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
@@ -528,7 +528,7 @@ def _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p):
 def _model_of(h, shift):
     """(matrix, shift) of a factor, where the spring step can refactorise it (sparse)."""
     if isinstance(h, CSC) or (sp.issparse(h) and h.format == "csc"):
-        return h, (None if np.isscalar(shift) and shift == 0.0 else shift)
+        return h, (None if isinstance(shift, float) and shift == 0.0 else shift)
     return None
 
 
@@ -554,7 +554,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
-        if listing + 1 == RELISTINGS or np.array_equal(best, p):  # p unchanged: same listing
+        if listing + 1 == RELISTINGS or _equal(best, p):  # p unchanged: same listing
             break
         rows, grown = _merged_rows(rows, barriers(st.x, best))
         if not grown:

@@ -89,6 +89,25 @@ def _all_finite(a):
     return True
 
 
+@njit(cache=True)
+def _equal_kernel(a, b):
+    for i in range(a.shape[0]):
+        if not a[i] == b[i]:
+            return False
+    return True
+
+
+def _equal(a, b) -> bool:
+    """``np.array_equal(a, b)`` for two float64 arrays of the same shape, in one compiled pass
+    (NaN unequal to itself, -0.0 equal to 0.0, as there).
+
+    >>> a = np.array([[0.0, 1.0], [np.nan, 2.0]])
+    >>> _equal(a[:1], -a[:1] + np.array([0.0, 2.0])), _equal(a, a), _equal(a[:1], a[:1] + 1e-16)
+    (True, False, False)
+    """
+    return bool(_equal_kernel(a.reshape(-1), b.reshape(-1)))
+
+
 def all_finite(a) -> bool:
     """``np.isfinite(a).all()`` for the minimisers' float64 arrays, in one compiled pass.
 

@@ -221,4 +221,4 @@ def _has_crossings(pos: np.ndarray) -> bool:
     hits, unsure = _crossing_candidates(pos, True)
     if hits.shape[0]:
         return True
-    return any(_intersect_exact(pos, int(i), int(j)) for i, j in unsure)
+    return unsure.shape[0] > 0 and any(_intersect_exact(pos, int(i), int(j)) for i, j in unsure)
