@@ -1,6 +1,7 @@
 """The command line: outputs match the library, every bad input is one line and exit != 0."""
 
 import json
+import math
 from pathlib import Path
 
 import h5py
@@ -493,6 +494,25 @@ def test_progress_goes_quiet_on_a_closed_pipe(monkeypatch):
     prog = Progress(quiet=False, n_replicas=1, n_stages=2, every=0.0)
     prog.stage(0, 0, 10.0, True)  # must not raise
     assert prog.quiet
+
+
+def test_the_time_left_follows_stages_that_grow_costlier(monkeypatch, capsys):
+    """After 10 stages of 1 s and 2 of 20 s, the time left is at the last five stages' pace
+    (8.6 s each), not at the average's (4.2 s), which read "~2 s left" before a last stage of
+    70 s at N = 10⁴. The progress line says which pace it uses."""
+    from crumple.cli.run import Progress, time_left
+
+    clock = iter([0.0, 1.0, 2.0, 3.0, 13.0, 23.0])
+    monkeypatch.setattr("crumple.cli.run.time.perf_counter", lambda: next(clock))
+    prog = Progress(quiet=False, n_replicas=1, n_stages=10, every=0.0)
+    for i in range(5):
+        prog.stage(0, i, 10.0 * i, True)
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "~23 s left at the last stages' pace" in err, err
+    times = [float(t) for t in range(1, 11)] + [30.0, 50.0]
+    assert time_left(times, 12, 14) == pytest.approx((50.0 - 7.0) / 5 * 2)
+    assert time_left(times, 12, 14) > 50.0 / 12 * 2  # the average's estimate, too short
+    assert math.isnan(time_left([], 0, 3)) and time_left([1.0], 3, 3) == 0.0
 
 
 @pytest.mark.parametrize("dpi", [0, -3])
