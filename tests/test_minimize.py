@@ -1287,9 +1287,9 @@ def test_all_finite_is_numpys_isfinite_all(values, two_d, strided):
 
 
 def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_radius():
-    """The σ search (``newton(shift_descents=4)``, the exact fallback's): from an overshooting σ = 1 on
-    H = diag(1, -0.01) it divides by 4 while H + σ stays positive definite (1/4, 1/16, 1/64;
-    1/256 < 0.01 is not) and the step stays below radius / 4; a small radius keeps σ."""
+    """The σ search (``newton(shift_descents=4)``, the exact fallback's): from an overshooting
+    σ = 1 on H = diag(1, -0.01) it divides by 4 while H + σ stays positive definite (1/4, 1/16,
+    1/64; 1/256 < 0.01 is not) and the step stays below radius / 4; a small radius keeps σ."""
     from crumple import minimize as mz
     from crumple.linalg import LDLT
 
