@@ -211,6 +211,7 @@ def test_powell_study_smoke_report(tmp_path):
         "crumple.minimize",
         "crumple.minimize_result",
         "crumple.minimize_modes",
+        "crumple.minimize_barriers",
         "crumple.linalg_springs",
     ],
 )

@@ -649,7 +649,7 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     exact minimiser (converged), and the default wire still reaches every contact stage's
     equilibrium, stable, without crossing, at the same energy as the normal path to within
     the force tolerance."""
-    import crumple.minimize as minimize_module
+    import crumple.minimize_barriers as minimize_module
     from crumple.linalg import Factorization
 
     wire = Wire(k_b=5, k_s=5e5, n_segments=60)

@@ -1,0 +1,85 @@
+"""The step of :func:`crumple.minimize.newton`'s model with a caller's barriers. Private,
+model-blind.
+
+A contact barrier that acts only within a distance d of its pair is invisible to a quadratic
+model taken outside it: the Newton step runs into it and is cut by the caller's
+``step_limit``. With ``barriers(x, p)`` the caller lists the barriers the step may enter, as
+one-sided springs the model adds (k_i/2 max(0, r_i - a_iᵀs)², the barrier's curvature at its
+edge); the step is then the minimiser of that convex piecewise quadratic, found with the factor
+the Newton direction was solved with (:meth:`crumple.linalg.Factorization.solve_springs`) or,
+where that runs out of rounds, a factorisation per active set
+(:func:`crumple.linalg_springs.spring_step`). The energy is unchanged: only the step is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .linalg_springs import new_rows, spring_step
+from .minimize_result import _equal, all_finite
+
+#: How many times :func:`_barrier_step` lists the barriers: for the Newton step, then for each
+#: step found, while that adds springs.
+RELISTINGS = 3
+
+
+def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
+    """The step of the model with the one-sided springs of ``barriers`` added.
+
+    The minimiser of the convex piecewise quadratic gᵀs + ½ sᵀHs + Σ k_i/2 max(0, r_i - a_iᵀs)²,
+    H the factored model (``st.factor``) (:func:`_spring_model_step`). The springs are those
+    ``barriers`` lists for p; the step found, held by its first contacts, can turn towards
+    pairs p never approached, so the springs are listed again for it and the model solved
+    again with them, up to ``RELISTINGS`` listings in all. Every step kept is checked to be a
+    descent direction (gᵀs < 0: the model's minimiser is one, because every r_i <= 0 makes the
+    model zero at s = 0; a point the solve reached without the active set need not be). If
+    none is, p is kept.
+    """
+    rows = barriers(st.x, p)
+    if len(rows[2]) == 0:
+        return p
+    g = st.g.ravel()
+    best = p
+    for listing in range(RELISTINGS):
+        s = _spring_model_step(st, p, rows, ldl)
+        if s is None or not float(np.dot(g, s)) < 0.0:
+            break
+        best = s.reshape(p.shape)
+        if listing + 1 == RELISTINGS or _equal(best, p):  # p unchanged: same listing
+            break
+        rows, grown = _merged_rows(rows, barriers(st.x, best))
+        if not grown:
+            break
+    return best
+
+
+def _spring_model_step(st, p, rows, ldl):
+    """The springs' model step: one solve per spring that becomes active, no new factorisation
+    (:meth:`crumple.linalg.Factorization.solve_springs`); where that runs out of rounds (a step
+    through a packed region), one factorisation of H plus the active springs per round
+    (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
+    still not found. None: no step."""
+    index, value, offset, stiff = rows
+    if st.mask is not None:
+        value = np.array(value, dtype=np.float64)
+        value[st.mask[index]] = 0.0
+    s, ok = st.factor.solve_springs(p, index, value, offset, stiff)
+    if not ok:
+        if st.model is None:
+            return None
+        start = s if all_finite(s) else p.ravel()
+        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, start)
+    return s
+
+
+def _merged_rows(rows, more):
+    """The springs of ``rows`` and those of ``more`` not among them, and whether any was added.
+    Both listings are made at the same point, so a spring is known by its row of ``index``."""
+    if len(more[2]) == 0:
+        return rows, False
+    new = new_rows(
+        np.ascontiguousarray(rows[0], dtype=np.int64), np.ascontiguousarray(more[0], dtype=np.int64)
+    )
+    if not new.any():
+        return rows, False
+    return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
