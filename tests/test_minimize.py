@@ -783,12 +783,14 @@ def test_an_accurate_product_leaves_a_resolved_problem_bitwise_unchanged(x0, spa
     )  # fmt: skip
 
 
-def test_the_opt_in_accurate_escape_steps_down_where_the_assembled_mode_cannot(monkeypatch):
+def test_the_accurate_escape_steps_down_where_the_assembled_mode_cannot(monkeypatch):
     """Two stiff chains: A truly unstable (soft -0.1), B stable (soft 0.1); the 'assembled' H
     shows them the other way round (±0.5 along their uniform modes). Its lowest mode (B's)
-    goes up: no step lowers the energy. With ``minimize_accurate.ACCURATE_ESCAPE`` the escape
-    takes the accurate lowest mode (A's), goes down to A's minimum, B untouched, and the
-    accurate product accepts it."""
+    goes up: no step lowers the energy, and without the accurate product the solver stops
+    there. With it, the escape then takes the accurate lowest mode (A's), goes down to A's
+    minimum, B untouched, and the accurate product accepts it. The opt-in
+    ``minimize_accurate.ACCURATE_ESCAPE`` takes the accurate mode first: the same minimum,
+    without the failed trials along the assembled mode."""
     import crumple.minimize_accurate as ma
 
     fa, exact_a, act_a = stiff_chain(soft=-0.1)
@@ -806,22 +808,28 @@ def test_the_opt_in_accurate_escape_steps_down_where_the_assembled_mode_cannot(m
     def action(x, v):
         return np.concatenate([act_a(x[:n], v[:n]), act_b(x[n:], v[n:])])
 
-    off = chain_newton(fun, hess, hess_action=action, size=2 * n)
-    assert "negative curvature that no step lowers" in off.message and off.energy == 0.0
+    blind = chain_newton(fun, hess, size=2 * n)
+    assert "negative curvature that no step lowers" in blind.message and blind.energy == 0.0
+    rescued = chain_newton(fun, hess, hess_action=action, size=2 * n)
     monkeypatch.setattr(ma, "ACCURATE_ESCAPE", True)
-    on = chain_newton(fun, hess, hess_action=action, size=2 * n)
-    assert on.converged, on.message
-    assert "stable by the accurate Hessian product" in on.message
-    np.testing.assert_allclose(np.abs(on.x[:n]), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
-    np.testing.assert_allclose(on.x[n:], 0.0, atol=1e-6)  # the accurate mode is ~0 on B
+    first = chain_newton(fun, hess, hess_action=action, size=2 * n)
+    for r in (rescued, first):
+        assert r.converged, r.message
+        assert "stable by the accurate Hessian product" in r.message
+        np.testing.assert_allclose(np.abs(r.x[:n]), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
+        np.testing.assert_allclose(r.x[n:], 0.0, atol=1e-6)  # the accurate mode is ~0 on B
+    assert "1 along the accurate Hessian product's mode" in rescued.message
+    assert "along the accurate" not in first.message  # taken first, not as a rescue
+    assert rescued.evaluations > first.evaluations  # the failed trials along B's mode
 
 
 def test_the_opt_in_recheck_of_a_positive_count_finds_the_curvature_it_missed(monkeypatch):
     """Soft -0.1, the 'assembled' H +0.5 along the uniform mode: its count finds no negative
     pivot at the maximum x = 0, which is accepted by default. With
-    ``ACCURATE_WHEN_POSITIVE`` the accurate product finds -0.1 / METRIC: the point is refused
-    (the assembled H has no direction to escape along); with ``ACCURATE_ESCAPE`` as well, the
-    solver goes down the accurate mode to the minimum |x_i| = √0.1 and accepts it there."""
+    ``ACCURATE_WHEN_POSITIVE`` the accurate product finds -0.1 / METRIC: the point is refused;
+    the assembled H has no direction to escape along, so the solver goes down the accurate
+    mode to the minimum |x_i| = √0.1 and accepts it there; with ``ACCURATE_ESCAPE`` as well,
+    the same, along the accurate mode from the first."""
     import crumple.minimize_accurate as ma
 
     fun, exact, action = stiff_chain(soft=-0.1)
@@ -829,14 +837,14 @@ def test_the_opt_in_recheck_of_a_positive_count_finds_the_curvature_it_missed(mo
     default = chain_newton(fun, hess, hess_action=action)
     assert default.converged and "accurate" not in default.message  # the count's verdict
     monkeypatch.setattr(ma, "ACCURATE_WHEN_POSITIVE", True)
-    refused = chain_newton(fun, hess, hess_action=action)
-    assert not refused.converged
-    assert "negative curvature that no step lowers" in refused.message
+    rechecked = chain_newton(fun, hess, hess_action=action)
     monkeypatch.setattr(ma, "ACCURATE_ESCAPE", True)
     both = chain_newton(fun, hess, hess_action=action)
-    assert both.converged, both.message
-    assert "stable by the accurate Hessian product" in both.message
-    np.testing.assert_allclose(np.abs(both.x), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
+    for r in (rechecked, both):
+        assert r.converged, r.message
+        assert "stable by the accurate Hessian product" in r.message
+        np.testing.assert_allclose(np.abs(r.x), math.sqrt(0.1), rtol=1e-4)  # ftol / 0.2
+    assert "along the accurate Hessian product's mode" in rechecked.message
 
 
 def _too_short_step(a):

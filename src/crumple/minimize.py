@@ -279,7 +279,13 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes"
-    if not _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode):
+    first = mode if minimize_accurate.ACCURATE_ESCAPE else None  # None: the assembled H's mode
+    escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, first)
+    if not escaped and first is None and mode is not None:
+        # the rescue: the assembled mode goes up (round-off at large N), the accurate one down
+        escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode)
+        st.accurate_escapes += escaped
+    if not escaped:
         st.unstable = True
         return "stopped at an equilibrium with negative curvature that no step lowers"
     st.escapes += 1
@@ -338,7 +344,9 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
 def _result(st, ldl, ftol, message) -> MinimizeResult:
     """The result of :func:`newton` from its final state and stop message."""
     if st.escapes and not st.unstable:
-        message += f" ({st.escapes} saddle escape{'s' if st.escapes > 1 else ''})"
+        along = (f", {st.accurate_escapes} along the accurate Hessian product's mode where the "
+                 "assembled one's went up" if st.accurate_escapes else "")  # fmt: skip
+        message += f" ({st.escapes} saddle escape{'s' if st.escapes > 1 else ''}{along})"
     return MinimizeResult(
         x=st.x,
         energy=st.e,
@@ -436,6 +444,7 @@ class _State:
     hess_action: Callable | None = None  # the accurate H v, or None
     exact: bool = True  # the last direction is the exact Hessian's Newton step
     escapes: int = 0  # saddle escapes taken
+    accurate_escapes: int = 0  # of them, along the accurate mode after the assembled one's failed
     refusals: int = 0  # points the accurate product found stable that the decrease test refused
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
     refine: bool = False  # forces below their resolution but a Newton step still pays: go on

@@ -39,11 +39,13 @@ PRECONDITIONER_SHIFT = 0.1
 ACCURATE_MAXITER = 100
 ACCURATE_RTOL = 1e-4
 ACCURATE_WINDOW = 5
-#: Opt-in (off: the escape is the one without an accurate product): where the accurate
-#: eigensolve found a negative eigenvalue, step along *its* mode rather than the assembled
-#: H's lowest mode, which at N = 10⁵ is a round-off direction that no step can go down along
-#: (measured: the straight wire at λ = 7.02, accurate μ = -3.80, stopped with "negative
-#: curvature that no step lowers").
+#: Opt-in (off: the escape first tries the assembled H's lowest mode, as without an accurate
+#: product): where the accurate eigensolve found a negative eigenvalue, step along *its* mode
+#: first. Off or on, where the assembled mode's escape finds no step that lowers the energy
+#: (at N ≳ 2 × 10⁴ it is a round-off direction: measured, the straight continuum wire at its
+#: buckling stage λ = 6.39, N = 2 × 10⁴, stopped with "negative curvature that no step
+#: lowers"), the escape then takes the accurate mode (:func:`_equilibrium`'s rescue): a stage
+#: that escaped before escapes as before, bit for bit.
 ACCURATE_ESCAPE = False
 #: Opt-in (off: the count decides when it finds no negative pivot): run the accurate
 #: eigensolve also where the count of an unresolved H found none. At N = 10⁵ the count can
@@ -161,9 +163,11 @@ def _accurate_check(st, h, m, ldl, floor, modes, check):
     :data:`ACCURATE_WHEN_POSITIVE`): (suffix, mode, model). suffix is the converged message's
     addition when ``st.hess_action`` shows the point stable where the assembled H cannot
     resolve τ (its lowest eigenvalue >= -τ, LOBPCG settled), else None; mode is (μ, v), the
-    accurate lowest mode for the escape, when :data:`ACCURATE_ESCAPE` and μ < -τ, else None;
+    accurate lowest mode for the escape, when μ < -τ, else None;
     model, with a suffix, the eigensolve's preconditioner (the factor of H + σM) and its Ritz
-    block, which :func:`_accurate_resolved` uses in turn."""
+    block, which :func:`_accurate_resolved` uses in turn. The mode is returned whenever μ < -τ:
+    the caller escapes along it first (:data:`ACCURATE_ESCAPE`) or where the assembled H's
+    lowest mode offers no step down."""
     if st.hess_action is None:
         return None, None, None
     tau = float(floor[0] / m[0])
@@ -179,7 +183,7 @@ def _accurate_check(st, h, m, ldl, floor, modes, check):
             f"({its} LOBPCG iterations), below the assembled matrix's resolution {res:.3g}"
         )
         return note, None, model
-    return None, ((mu, v) if ACCURATE_ESCAPE and mu < -tau else None), None
+    return None, ((mu, v) if mu < -tau else None), None
 
 
 def _accurate_resolved(st, model, modes, floor) -> tuple[bool, str]:
