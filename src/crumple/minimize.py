@@ -185,7 +185,9 @@ def newton(
         where the inertia count finds negative curvature that the assembled matrix cannot
         resolve (its resolution, ``minimize_accurate._assembly_resolution``, above τ): the
         lowest eigenvalue of (H, M) is then found by LOBPCG on this product, and the point is
-        a minimum if it is >= -τ (LOBPCG settled); else the escape is as without it.
+        a minimum if it is >= -τ (LOBPCG settled); else the escape is as without it, except
+        where no step along the assembled H's lowest mode lowers the energy (a round-off
+        direction): it then steps along the accurate lowest mode.
     retract : callable, optional
         ``retract(x, p, alpha) -> x'``: a point on a curve through x whose tangent is p
         (x' = x + αp + O(α²)), e.g. a chain with its segments turned instead of their ends
