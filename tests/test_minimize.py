@@ -823,6 +823,39 @@ def test_the_accurate_escape_steps_down_where_the_assembled_mode_cannot(monkeypa
     assert rescued.evaluations > first.evaluations  # the failed trials along B's mode
 
 
+def test_an_escape_along_the_assembled_mode_is_unchanged_where_the_accurate_mode_is_known(
+    monkeypatch,
+):
+    """Soft -0.1, the assembled H exact: the count finds the negative curvature, the accurate
+    product confirms it and has its mode, and the escape along the assembled mode goes down.
+    The rescue must not touch that path: the run is the same, bit for bit, as one whose
+    accurate check offers no mode at all (the engine before the rescue)."""
+    import crumple.minimize as mz
+    import crumple.minimize_accurate as ma
+
+    fun, exact, action = stiff_chain(soft=-0.1)
+    hess = lambda x: sp.csc_matrix(exact(x))  # noqa: E731
+    offered = []
+    check = ma._accurate_check
+
+    def recorded(*args):
+        out = check(*args)
+        offered.append(out[1] is not None)
+        return out
+
+    monkeypatch.setattr(mz, "_accurate_check", recorded)
+    with_mode = chain_newton(fun, hess, hess_action=action)
+    monkeypatch.setattr(mz, "_accurate_check", lambda *a: (lambda o: (o[0], None, o[2]))(check(*a)))
+    without = chain_newton(fun, hess, hess_action=action)
+    assert any(offered), "the accurate check never offered a mode: the test tests nothing"
+    assert "saddle escape" in with_mode.message and "along the accurate" not in with_mode.message
+    assert with_mode.message == without.message
+    np.testing.assert_array_equal(with_mode.x, without.x)
+    assert (with_mode.energy, with_mode.iterations, with_mode.evaluations) == (
+        without.energy, without.iterations, without.evaluations,
+    )  # fmt: skip
+
+
 def test_the_opt_in_recheck_of_a_positive_count_finds_the_curvature_it_missed(monkeypatch):
     """Soft -0.1, the 'assembled' H +0.5 along the uniform mode: its count finds no negative
     pivot at the maximum x = 0, which is accepted by default. With

@@ -280,7 +280,7 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
         return _minimum(st, ftol, lambda: _accurate_resolved(st, model, modes, floor), stable)
     if st.escapes >= max_escapes:
         st.unstable = True
-        return f"stopped at an unstable equilibrium after {st.escapes} escapes"
+        return f"stopped at an unstable equilibrium after {st.escapes} escapes{_along(st)}"
     first = mode if minimize_accurate.ACCURATE_ESCAPE else None  # None: the assembled H's mode
     escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, first)
     if not escaped and first is None and mode is not None:
@@ -346,9 +346,7 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
 def _result(st, ldl, ftol, message) -> MinimizeResult:
     """The result of :func:`newton` from its final state and stop message."""
     if st.escapes and not st.unstable:
-        along = (f", {st.accurate_escapes} along the accurate Hessian product's mode where the "
-                 "assembled one's went up" if st.accurate_escapes else "")  # fmt: skip
-        message += f" ({st.escapes} saddle escape{'s' if st.escapes > 1 else ''}{along})"
+        message += f" ({st.escapes} saddle escape{'s' if st.escapes > 1 else ''}{_along(st)})"
     return MinimizeResult(
         x=st.x,
         energy=st.e,
@@ -364,6 +362,14 @@ def _result(st, ldl, ftol, message) -> MinimizeResult:
         force_resolution=st.fres,
         curved_steps=st.curved,
     )
+
+
+def _along(st) -> str:
+    """The escape message's note of the escapes the accurate mode took (the rescue), or ""."""
+    if not st.accurate_escapes:
+        return ""
+    return (f", {st.accurate_escapes} along the accurate Hessian product's mode where the "
+            "assembled one's gave no step down")  # fmt: skip
 
 
 def _fixed_mask(fixed, x):
