@@ -496,23 +496,55 @@ def test_progress_goes_quiet_on_a_closed_pipe(monkeypatch):
     assert prog.quiet
 
 
-def test_the_time_left_follows_stages_that_grow_costlier(monkeypatch, capsys):
-    """After 10 stages of 1 s and 2 of 20 s, the time left is at the last five stages' pace
-    (8.6 s each), not at the average's (4.2 s), which read "~2 s left" before a last stage of
-    70 s at N = 10⁴. The progress line says which pace it uses."""
-    from crumple.cli.run import Progress, time_left
+def _progress_at(monkeypatch, ticks, n_replicas, n_stages):
+    """A Progress whose clock reads ``ticks`` (the start, then one per call)."""
+    from crumple.cli.run import Progress
 
-    clock = iter([0.0, 1.0, 2.0, 3.0, 13.0, 23.0])
-    monkeypatch.setattr("crumple.cli.run.time.perf_counter", lambda: next(clock))
-    prog = Progress(quiet=False, n_replicas=1, n_stages=10, every=0.0)
-    for i in range(5):
+    clock = iter(ticks)
+    monkeypatch.setattr("crumple.cli.progress.time.perf_counter", lambda: next(clock))
+    return Progress(quiet=False, n_replicas=n_replicas, n_stages=n_stages, every=0.0)
+
+
+def _last_line(capsys) -> str:
+    return capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_the_time_left_follows_stages_that_grow_costlier(monkeypatch, capsys):
+    """Stages of 1, 1, 1, then 10 s: after 7 of 10 the three left are timed at the pace of the
+    last five (8.2 s each: ~25 s), not at the average of all seven (6.1 s each: ~18 s), which
+    read "~2 s left" before a last stage of 70 s at N = 10⁴."""
+    ticks = [0.0, 1.0, 2.0, 3.0, 13.0, 23.0, 33.0, 43.0]
+    prog = _progress_at(monkeypatch, ticks, 1, 10)
+    for i in range(7):
         prog.stage(0, i, 10.0 * i, True)
-    err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert "~23 s left at the last stages' pace" in err, err
-    times = [float(t) for t in range(1, 11)] + [30.0, 50.0]
-    assert time_left(times, 12, 14) == pytest.approx((50.0 - 7.0) / 5 * 2)
-    assert time_left(times, 12, 14) > 50.0 / 12 * 2  # the average's estimate, too short
-    assert math.isnan(time_left([], 0, 3)) and time_left([1.0], 3, 3) == 0.0
+    assert "~25 s left" in _last_line(capsys)
+
+
+def test_a_second_replica_is_timed_by_the_first_ones_stages(monkeypatch, capsys):
+    """Replica 0: four stages of 1 s, then one of 70 s; replica 1 has run two stages of 1 s.
+    Its three stages left cost what they cost in replica 0 (1 + 1 + 70 s): ~72 s, where the
+    recent pace said ~44 s and the average ~33 s."""
+    from types import SimpleNamespace
+
+    ticks = [0.0, 1.0, 2.0, 3.0, 4.0, 74.0, 74.0, 75.0, 76.0]
+    prog = _progress_at(monkeypatch, ticks, 2, 5)
+    for i in range(5):
+        prog.stage(0, i, 1.0, True)
+    prog.replica(0, SimpleNamespace(failed_stages=[], stages=[None] * 5))
+    for i in range(2):
+        prog.stage(1, i, 1.0, True)
+    assert "~72 s left" in _last_line(capsys)
+
+
+def test_the_time_left_weighs_the_stages_by_their_measured_costs():
+    from crumple.cli.progress import time_left
+
+    costs = {0: [1.0], 1: [1.0, 1.0], 2: [1.0], 3: [1.0], 4: [70.0]}
+    assert time_left(costs, {0: 5, 1: 2}, {0: 0, 1: 3}, 76.0, [1.0] * 4 + [70.0, 1.0]) == 72.0
+    # two workers: the same work done in half the time leaves half the time
+    assert time_left(costs, {0: 5, 1: 2}, {0: 0, 1: 3}, 38.0, [1.0] * 4 + [70.0, 1.0]) == 36.0
+    assert math.isnan(time_left({}, {}, {0: 3}, 0.0, []))
+    assert time_left(costs, {0: 5}, {0: 0}, 74.0, [1.0]) == 0.0  # nothing left
 
 
 @pytest.mark.parametrize("dpi", [0, -3])

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import signal
 import sys
@@ -34,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
+from .progress import Progress
 from .signals import Terminated, _on_sigterm, signal_cause
 
 __all__ = ["cmd_run", "register"]
@@ -219,90 +219,6 @@ def describe(wire, ramp, run, workers: int) -> str:
 # --------------------------------------------------------------------------------------------
 # Progress
 # --------------------------------------------------------------------------------------------
-
-
-#: The estimate of the time left is made at the pace of the last this many stages finished (a
-#: ramp's stages cost more as λ grows and contacts multiply: the average over every stage done
-#: said "~2 s left" before a last stage of 70 s at N = 10⁴).
-RECENT_STAGES = 5
-
-
-def time_left(finished: list[float], done: int, total: int) -> float:
-    """Seconds left for ``total - done`` stages at the pace of the last :data:`RECENT_STAGES`
-    of the times ``finished`` (since the start, in order; the start itself at 0); NaN before
-    the first stage.
-
-    >>> time_left([1.0, 2.0, 4.0, 8.0], done=4, total=6)   # last 4 stages: 2 s each
-    4.0
-    >>> time_left([1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0], done=7, total=8)  # last 5: 62 s
-    12.4
-    """
-    if not finished or done >= total:
-        return math.nan if not finished else 0.0
-    k = min(RECENT_STAGES, len(finished))
-    start = finished[-k - 1] if len(finished) > k else 0.0
-    return (finished[-1] - start) / k * (total - done)
-
-
-class Progress:
-    """Stages and replicas done, on stderr: one rewritten line on a terminal, else a line at
-    most every ``every`` seconds, and one line per finished replica. The time left is at the
-    pace of the last few stages (:func:`time_left`)."""
-
-    def __init__(self, quiet: bool, n_replicas: int, n_stages: int, every: float = 5.0):
-        self.quiet, self.every = quiet, every
-        self.n_rep, self.n_stages = n_replicas, n_stages
-        self.tty = sys.stderr.isatty()
-        self.t0 = time.perf_counter()
-        self.last = -math.inf
-        self.stages_done: dict[int, int] = {}
-        self.not_converged = 0
-        self.replicas_done = 0
-        self.finished: list[float] = []  # when each stage finished, seconds since the start
-
-    def _write(self, line: str, force: bool = False) -> None:
-        if self.quiet:
-            return
-        try:
-            if self.tty:
-                sys.stderr.write(f"\r{line}   ")
-            elif force or time.monotonic() - self.last >= self.every:
-                self.last = time.monotonic()
-                sys.stderr.write(line + "\n")
-            sys.stderr.flush()
-        except OSError:  # stderr closed (e.g. `2>&1 | head`): go quiet, keep computing
-            self.quiet = True
-
-    def stage(self, r: int, i: int, lam: float, converged: bool) -> None:
-        self.stages_done[r] = i + 1
-        self.not_converged += not converged
-        done = sum(self.stages_done.values())
-        total = self.n_rep * self.n_stages
-        elapsed = time.perf_counter() - self.t0
-        self.finished.append(elapsed)
-        eta = time_left(self.finished, done, total)
-        bad = f", {self.not_converged} NOT converged" if self.not_converged else ""
-        self._write(
-            f"  stage {done}/{total} (replica {r}: λ = {lam:.4g}){bad}, "
-            f"{self.replicas_done}/{self.n_rep} replica(s) done, {elapsed:.0f} s elapsed, "
-            f"~{eta:.0f} s left at the last stages' pace"
-        )
-
-    def replica(self, r: int, result) -> None:
-        self.replicas_done += 1
-        self.stages_done[r] = self.n_stages  # an early stop counts as all its stages
-        bad = len(result.failed_stages)
-        note = "all stages converged" if not bad else f"{bad} stage(s) NOT converged"
-        elapsed = time.perf_counter() - self.t0
-        if self.tty and not self.quiet:
-            sys.stderr.write("\r")
-        self._write(
-            f"  replica {r} done ({self.replicas_done}/{self.n_rep}): {len(result.stages)} "
-            f"stages, {note}  [{elapsed:.1f} s elapsed]" + (" " * 10 if self.tty else ""),
-            force=True,
-        )
-        if self.tty and not self.quiet:
-            sys.stderr.write("\n")
 
 
 # --------------------------------------------------------------------------------------------
