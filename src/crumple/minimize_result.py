@@ -104,8 +104,10 @@ def _equal(a, b) -> bool:
     >>> a = np.array([[0.0, 1.0], [np.nan, 2.0]])
     >>> _equal(a[:1], -a[:1] + np.array([0.0, 2.0])), _equal(a, a), _equal(a[:1], a[:1] + 1e-16)
     (True, False, False)
+    >>> _equal(np.array([-0.0]), np.array([0.0])), _equal(a, a[:1])
+    (True, False)
     """
-    return bool(_equal_kernel(a.reshape(-1), b.reshape(-1)))
+    return a.shape == b.shape and bool(_equal_kernel(a.reshape(-1), b.reshape(-1)))
 
 
 def all_finite(a) -> bool:
