@@ -284,7 +284,7 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     first = mode if minimize_accurate.ACCURATE_ESCAPE else None  # None: the assembled H's mode
     escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, first)
     if not escaped and first is None and mode is not None:
-        # the rescue: the assembled mode goes up (round-off at large N), the accurate one down
+        # the rescue: the assembled mode gives no step down (round-off at large N)
         escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode)
         st.accurate_escapes += escaped
     if not escaped:
@@ -542,7 +542,7 @@ def _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p):
 def _model_of(h, shift):
     """(matrix, shift) of a factor, where the spring step can refactorise it (sparse)."""
     if isinstance(h, CSC) or (sp.issparse(h) and h.format == "csc"):
-        return h, (None if isinstance(shift, float) and shift == 0.0 else shift)
+        return h, shift  # None or an array: the callers pass no scalar shift
     return None
 
 
