@@ -26,9 +26,13 @@ def test_solve_and_inertia_match_dense_linear_algebra(seed, n, density):
     a = random_symmetric(rng, n, density, 0.0)
     dense = a.toarray()
     eig = np.linalg.eigvalsh(dense)
-    # a shift between two eigenvalues, well away from both: an unambiguous inertia
+    # a shift between two eigenvalues, well away from both: an unambiguous inertia. It is drawn
+    # inside the gap, not at its midpoint: a symmetric spectrum such as [[0, v], [v, 0]]'s has
+    # the midpoint 0, where an LDLᵀ without pivoting meets a zero leading pivot, which it counts
+    # as non-positive by design (the inertia of A + σI is then undefined by its pivots).
     apart = np.diff(eig) > 1e-6 * (1.0 + np.abs(eig).max())
-    gaps = np.r_[eig[0] - 1.0, 0.5 * (eig[:-1] + eig[1:])[apart], eig[-1] + 1.0]
+    t = rng.uniform(0.25, 0.75)
+    gaps = np.r_[eig[0] - 1.0, (eig[:-1] + t * np.diff(eig))[apart], eig[-1] + 1.0]
     sigma = -float(rng.choice(gaps))
     f = LDLT().factorize(a, shift=np.full(n, sigma))
     assert f.negative == int(np.sum(eig + sigma < 0))
@@ -38,6 +42,14 @@ def test_solve_and_inertia_match_dense_linear_algebra(seed, n, density):
         np.testing.assert_allclose(
             (dense + sigma * np.eye(n)) @ x, b, atol=1e-8 * (1 + np.abs(x).max())
         )
+
+
+def test_a_zero_leading_pivot_counts_as_non_positive():
+    # [[0, v], [v, 0]] has inertia (1, 1), but an unpivoted LDLᵀ meets d₀ = 0: the count is then
+    # conservative (more non-positive pivots, never fewer), so Newton refuses rather than accepts
+    a = sp.csc_matrix(np.array([[0.0, 0.95], [0.95, 0.0]]))
+    assert LDLT().factorize(a).negative == 2
+    assert LDLT().factorize(a, shift=np.full(2, 1e-3)).negative == 1
 
 
 def test_positive_definite_chain_solves_to_round_off():
