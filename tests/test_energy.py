@@ -1094,3 +1094,67 @@ def test_touching_says_whether_a_contact_acts():
         rebuilds = energy.rebuilds
         assert energy.touching(pos) is inside
         assert energy.rebuilds == rebuilds  # it reads the list, never rebuilds it
+
+
+def _elastic_gradient_longdouble(x, k_b, k_s, l0, lam, weights):
+    """Bending, stretching and confinement forces of x (float64 or longdouble) in numpy's
+    longdouble (x86-64: a 64-bit mantissa, 2¹¹ times finer than float64)."""
+    x = np.asarray(x, dtype=np.longdouble)
+    e = np.diff(x, axis=0)
+    length = np.sqrt(np.sum(e * e, axis=1))
+    g = np.zeros_like(x)
+    c = (k_s * (length - l0) / length)[:, None] * e
+    g[:-1] -= c
+    g[1:] += c
+    a, b = e[:-1], e[1:]
+    theta = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.sum(a * b, axis=1))
+    la2, lb2 = np.sum(a * a, axis=1), np.sum(b * b, axis=1)
+    ga = k_b * theta[:, None] * np.c_[a[:, 1] / la2, -a[:, 0] / la2]
+    gb = k_b * theta[:, None] * np.c_[-b[:, 1] / lb2, b[:, 0] / lb2]
+    g[:-2] -= ga
+    g[1:-1] += ga - gb
+    g[2:] += gb
+    return g + 2 * lam * np.asarray(weights, dtype=np.longdouble)[:, None] * x
+
+
+@pytest.mark.skipif(np.finfo(np.longdouble).nmant < 60, reason="needs an extended longdouble")
+def test_displaced_forces_resolve_what_float64_positions_cannot():
+    """At N = 5 × 10⁴ a curved wire's bending forces, from float64 node positions x, carry a
+    round-off of ~ε k_b/l0² |x| per node, above the typical force itself; from a reference and
+    a small displacement, x = ref + u with each segment (ref_{i+1} − ref_i) + (u_{i+1} − u_i),
+    they are the exact configuration's to ~ε k_b/l0 (against an extended-precision evaluation
+    of the very same ref + u)."""
+    n = 50_000
+    w = Wire.from_continuum(bending=0.05, stretching=5000, n_segments=n)
+    s = np.linspace(-0.5, 0.5, n + 1)
+    ref = np.c_[s, 0.02 * np.cos(np.pi * s)]
+    u = 1e-9 * np.c_[np.sin(3 * s), np.cos(5 * s)]
+    energy = WireEnergy(w, lam=6.0)
+    args = (w.k_b, w.k_s, w.rest_length, 6.0, energy.weights)
+    exact = _elastic_gradient_longdouble(ref.astype(np.longdouble) + u, *args)
+    typical = float(np.median(np.abs(exact)))
+    err_rounded = float(np.max(np.abs(energy(ref + u)[1] - exact)))
+    err_precise = float(np.max(np.abs(energy.displaced(ref)(u)[1] - exact)))
+    # the float64 sum ref + u is itself the error: the same forces in extended precision
+    sum_error = float(np.max(np.abs(_elastic_gradient_longdouble(ref + u, *args) - exact)))
+    assert err_rounded > typical and sum_error > 0.9 * err_rounded
+    assert err_precise < 1e-2 * typical
+    assert err_precise < 100 * np.finfo(float).eps * w.k_b / w.rest_length
+
+
+def test_the_displaced_energy_is_the_energy_of_the_sum():
+    """Away from round-off, displaced(ref)(u) is the energy and gradient at ref + u, with the hard
+    core's pairs, and at u = 0 it is the energy itself, bit for bit (the same kernel)."""
+    w = Wire(k_b=5, k_s=5e5, n_segments=60, hard_core=0.004)
+    ref = staggered_hairpin(30, w.rest_length, 0.003)
+    u = 1e-5 * np.random.default_rng(1).standard_normal(ref.shape)
+    energy = WireEnergy(w, lam=2.0)
+    e, g = energy(ref + u)
+    ed, gd = energy.displaced(ref)(u)
+    assert energy.terms(ref + u).hard_core > 0
+    np.testing.assert_allclose(ed, e, rtol=1e-12)
+    np.testing.assert_allclose(gd, g, rtol=1e-7, atol=1e-7 * np.abs(g).max())
+    e0, g0 = energy.displaced(ref)(np.zeros_like(ref))
+    assert e0 == energy(ref)[0] and np.array_equal(g0, energy(ref)[1])
+    with pytest.raises(ValueError, match="shape"):
+        energy.displaced(ref[:-1])

@@ -38,11 +38,33 @@ def _bend_law(theta, k_b, s, theta_p):
 
 
 @njit(cache=True)
-def _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms):
+def _segment(pos, disp, i):
+    """Segment i's vector x_{i+1} - x_i of x = pos (``disp`` None: this branch alone is
+    compiled) or of x = pos + disp, as (pos_{i+1} - pos_i) + (disp_{i+1} - disp_i): its
+    round-off is then ε |x_{i+1} - x_i| + ε |disp|, not ε |x| (the float64 rounding of pos + disp
+    itself moves a segment of a wire of size |x| by ε |x|)."""
+    if disp is None:
+        return pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
+    return ((pos[i + 1, 0] - pos[i, 0]) + (disp[i + 1, 0] - disp[i, 0]),
+            (pos[i + 1, 1] - pos[i, 1]) + (disp[i + 1, 1] - disp[i, 1]))  # fmt: skip
+
+
+@njit(cache=True)
+def _node(pos, disp, i, cx, cy):
+    """Node i's position relative to (cx, cy), of x = pos or x = pos + disp."""
+    if disp is None:
+        return pos[i, 0] - cx, pos[i, 1] - cy
+    return (pos[i, 0] - cx) + disp[i, 0], (pos[i, 1] - cy) + disp[i, 1]
+
+
+@njit(cache=True)
+def _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms,
+                disp=None):  # fmt: skip
     """Bending, stretching and confinement in one pass; energies by term into ``terms[:3]``.
 
     Each segment vector is computed once and reused by the two joints that share it.
-    ``rest`` holds the rest turning angle of every joint (zeros for a straight wire).
+    ``rest`` holds the rest turning angle of every joint (zeros for a straight wire). With
+    ``disp``, of the positions pos + disp, each segment from :func:`_segment`'s sum.
     """
     n = pos.shape[0]
     eb = 0.0
@@ -50,7 +72,7 @@ def _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad,
     ec = 0.0
     ax = ay = la2 = 0.0
     for i in range(n - 1):
-        bx, by = pos[i + 1, 0] - pos[i, 0], pos[i + 1, 1] - pos[i, 1]
+        bx, by = _segment(pos, disp, i)
         lb2 = bx * bx + by * by
         length = math.sqrt(lb2)
         dl = length - l0
@@ -75,7 +97,7 @@ def _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad,
         ax, ay, la2 = bx, by, lb2
     if lam != 0.0:
         for i in range(n):
-            rx, ry = pos[i, 0] - cx, pos[i, 1] - cy
+            rx, ry = _node(pos, disp, i, cx, cy)
             w = lam * weights[i]
             ec += w * (rx * rx + ry * ry)
             grad[i, 0] += 2.0 * w * rx
@@ -163,11 +185,14 @@ def _max_displacement(x, ref):
 
 @njit(cache=True)
 def _total_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, ks, js, width, strength,
-              radius, terms):  # fmt: skip
+              radius, terms, disp=None):  # fmt: skip
+    """Every term at x = pos, or at x = pos + disp (the elastic ones from its segments' sums,
+    :func:`_segment`; the hard core and the wall at the float64 sum)."""
     grad = np.zeros_like(pos)
-    _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms)
-    terms[3] = _hard_core_eg(pos, ks, js, width, strength, grad)
-    terms[4] = _wall_eg(pos, radius, width, strength, grad)
+    _elastic_eg(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, cx, cy, grad, terms, disp)
+    x = pos if disp is None else pos + disp
+    terms[3] = _hard_core_eg(x, ks, js, width, strength, grad)
+    terms[4] = _wall_eg(x, radius, width, strength, grad)
     return terms[0] + terms[1] + terms[2] + terms[3] + terms[4], grad
 
 
