@@ -723,17 +723,27 @@ def test_stability_below_the_assembled_resolution_is_decided_by_the_accurate_pro
     np.testing.assert_array_equal(r.x, 0.0)
 
 
-def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product():
+def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product(monkeypatch):
     """Soft spring negative (-0.1), H exact: x = 0 is a maximum along the uniform mode, the
-    accurate product confirms the count, and the escape and the rest are those without it."""
+    accurate product confirms the count, and the escape and the rest are those without it
+    (with the factor's steps); with the product's steps (``minimize_krylov``) the same escape
+    reaches the same minimum."""
+    import crumple.minimize_krylov as mk
+
     fun, exact, action = stiff_chain(soft=-0.1)
     hess = lambda x: sp.csc_matrix(exact(x))  # noqa: E731
     blind = chain_newton(fun, hess)
+    stepped = chain_newton(fun, hess, hess_action=action)
+    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
     r = chain_newton(fun, hess, hess_action=action)
     assert "escape" in blind.message
     assert r.message == blind.message
     np.testing.assert_array_equal(r.x, blind.x)
     assert (r.iterations, r.evaluations) == (blind.iterations, blind.evaluations)
+    assert stepped.converged and "(1 saddle escape)" in stepped.message
+    assert stepped.krylov_iterations > 0 and r.krylov_iterations == 0
+    assert stepped.energy == pytest.approx(blind.energy, rel=1e-12)
+    np.testing.assert_allclose(stepped.x, blind.x, atol=1e-9)
 
 
 def test_fixed_rows_reach_the_accurate_product_as_the_identity():
@@ -1134,13 +1144,17 @@ def test_forces_below_their_resolution_but_coherent_are_not_a_minimum():
     assert r.converged and r.max_force <= 1e-6 and r.energy < 1e-3 * fun(x0)[0]
 
 
-def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decrease():
+def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decrease(monkeypatch):
     """Where the assembled H cannot resolve τ and the accurate product decides stability (N ~
     10⁵), a point accepted only below the force floor must still pass the decrease test: the
     soft quartic of the chain above (every force below its resolution, yet coherent), in a
     metric that puts the assembled resolution above τ, and an 'assembled' H wrong along the
     uniform mode (a negative pivot that is round-off): the accurate product finds the point
-    stable, but a Newton step from it predicts a decrease far above a one-ulp move's."""
+    stable, but a Newton step from it predicts a decrease far above a one-ulp move's. (The
+    factor's steps, which stay there: the product's own steps leave it, test below.)"""
+    import crumple.minimize_krylov as mk
+
+    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
     fun, _, x0, kw = _wrong_along_the_uniform_mode()
     assert max_force(fun(x0)[1]) < 0.25 * _force_resolution(kw["hess"](x0), x0)
     r = newton(fun, x0, maxiter=3, **kw)
@@ -1149,6 +1163,53 @@ def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decre
     assert "not a minimum" in r.message
     assert r.max_force <= r.force_resolution  # what the force test and the product accepted
     assert r.energy > 1e-3  # and rightly refused: the minimum is E = 0 at x = x0 + 1
+
+
+def test_the_accurate_steps_reach_the_minimum_the_factor_cannot(monkeypatch):
+    """The chain above: the factor of the 'assembled' H, wrong along the soft uniform mode,
+    steps by round-off there and the stage stops after 20 points the decrease test refused
+    (energy 0.043 above the minimum E = 0). Newton's step by truncated CG on the accurate
+    product, preconditioned by that factor, converges (measured: 6 iterations, 6 CG)."""
+    import crumple.minimize_krylov as mk
+
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    r = newton(fun, x0, maxiter=50, **kw)
+    assert r.converged, r.message
+    assert "stable by the accurate Hessian product" in r.message
+    assert r.energy < 1e-5 and 0 < r.krylov_iterations <= 10 * r.iterations
+    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
+    old = newton(fun, x0, maxiter=50, **kw)
+    assert not old.converged and old.energy > 1e-2, old.message
+    assert old.krylov_iterations == 0
+
+
+def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
+    """Inside the trust radius and where the accurate H is positive definite, the step is
+    -H⁻¹g of the accurate product, not the wrong factor's (here 160 times apart along the soft
+    mode); beyond the radius it stops on the way there, a descent direction."""
+    from crumple.linalg import LDLT
+    from crumple.minimize import _State
+    from crumple.minimize_krylov import _accurate_step
+
+    fun, hess, x0, kw = _wrong_along_the_uniform_mode()
+    n = x0.size
+    m = np.full(n, 1e-9)
+    floor = 1e-3 * m
+    wrong = kw["hess"](x0)
+    shift = 1.0 * np.ones(n)  # the fallback's σM that makes it positive definite
+    f = LDLT().factorize(wrong, shift=shift)
+    assert f.positive_definite
+    e, g = fun(x0)
+    st = _State(x=x0, e=e, g=g, fmax=max_force(g), radius=np.inf)
+    st.factor, st.model, st.hess_action = f, (wrong, shift), kw["hess_action"]
+    p = -f.solve(g)
+    s = _accurate_step(st, p, m, floor)
+    newton_step = -np.linalg.solve(hess(x0).toarray(), g)
+    np.testing.assert_allclose(s, newton_step, rtol=1e-6, atol=1e-9 * np.abs(newton_step).max())
+    assert np.abs(s).mean() > 100 * np.abs(p).mean()  # the factor's step is round-off there
+    st.radius = 0.1 * np.abs(newton_step).max()
+    short = _accurate_step(st, p, m, floor)
+    assert float(g @ short) < 0 and np.abs(short).max() < np.abs(newton_step).max()
 
 
 def _wrong_along_the_uniform_mode(n=200, metric=1e-9):

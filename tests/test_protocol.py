@@ -590,15 +590,25 @@ def test_straight_wire_buckles_at_the_same_stage_at_every_n():
 def test_the_straight_wire_buckles_on_time_where_the_assembled_mode_is_round_off():
     """At N = 2 × 10⁴ (~20 s) the assembled Hessian's lowest mode at the buckling saddle is
     round-off: no step along it lowers the energy, and the engine stopped there with
-    "negative curvature that no step lowers" (the wire then buckled a stage late). Where that
-    happens the escape takes the accurate product's mode: the wire buckles at the stage of
-    every smaller N, and the stage says how it escaped."""
+    "negative curvature that no step lowers" (the wire then buckled a stage late). Now its
+    steps are the accurate product's (truncated CG, ``minimize_krylov``), and with the
+    factor's steps the escape takes the accurate product's mode where the assembled one's
+    fails (the ninth stop's rescue): either way the wire buckles at the stage of every
+    smaller N."""
+    import crumple.minimize_krylov as mk
+
     wire = Wire.from_continuum(**CONTINUUM, n_segments=20_000)
     result = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[:8]), seed=0)
     assert result.converged, result.failed_stages
     first = [s.energy.bending > 1e-3 for s in result.stages].index(True)
     assert first == _first_buckled_stage(100)
-    assert "along the accurate Hessian product's mode" in result.stages[first].result.message
+    assert result.stages[first].result.krylov_iterations > 0
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(mk, "ACCURATE_STEPS", False)
+        rescued = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[: first + 1]), seed=0)
+    assert rescued.converged, rescued.failed_stages
+    assert rescued.stages[first].energy.bending > 1e-3
+    assert "along the accurate Hessian product's mode" in rescued.stages[first].result.message
 
 
 def _lowest_curvature_per_length(wire, stage):

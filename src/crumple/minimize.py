@@ -39,6 +39,7 @@ from .minimize_accurate import (
     _recheck,
 )
 from .minimize_barriers import _barrier_step
+from .minimize_krylov import _accurate_step
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
@@ -81,6 +82,7 @@ def newton(
     hess_action: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
     shift_descents: int | None = None,
+    accurate_steps: bool = True,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -200,6 +202,12 @@ def newton(
         The fallback's search for σ: once σM makes it positive definite, divide σ by
         ``SHIFT_DESCENT`` up to this many times while the step stays inside the trust radius
         over ``SHIFT_ROOM`` and the factor positive definite. Default :data:`SHIFT_DESCENTS`.
+    accurate_steps : bool
+        With ``hess_action``, where the assembled H cannot resolve τ: the step is Steihaug's
+        truncated CG on the product, preconditioned by the direction's factor, instead of the
+        factor's own (``minimize_krylov``; at a saddle the factor's shift is set by round-off
+        and its step along the unstable mode is ~10⁻³ of the right one). Only where no
+        barrier spring acts on the step.
 
     Returns
     -------
@@ -235,6 +243,7 @@ def newton(
     st.zero_modes = zero_modes
     st.hess_action = hess_action
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
+    st.accurate_steps = bool(accurate_steps)
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -333,8 +342,9 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
     entries) and its line search; ``st`` updated; None, or why the iteration failed."""
     st.it += 1
     p = _direction(st, hess, hess_fallback, ldl, floor, m)
-    if barriers is not None:
-        p = _barrier_step(st, p, barriers, ldl)
+    q = p if barriers is None else _barrier_step(st, p, barriers, ldl)
+    # with no spring in the step, the accurate product's where the assembled H cannot resolve
+    p = _accurate_step(st, p, m, floor) if q is p else q
     if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
         p.reshape(-1)[st.mask] = 0.0
     if not all_finite(p):
@@ -361,6 +371,7 @@ def _result(st, ldl, ftol, message) -> MinimizeResult:
         factorizations=ldl.factorizations,
         force_resolution=st.fres,
         curved_steps=st.curved,
+        krylov_iterations=st.krylov,
     )
 
 
@@ -459,6 +470,8 @@ class _State:
     refine_note: str = ""
     curved: int = 0  # accepted steps that were the retracted (curved) point
     descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
+    krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
+    accurate_steps: bool = True  # newton(accurate_steps=...)
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:

@@ -42,6 +42,10 @@ class MinimizeResult:
     curved_steps : int
         Newton with a ``retract``: the accepted steps that were the curved point, not the
         straight one.
+    krylov_iterations : int
+        Newton with a ``hess_action``: the conjugate-gradient iterations of the steps taken with
+        the accurate product where the assembled Hessian cannot resolve the soft modes
+        (``minimize_krylov``); each is one product and one solve with the factor.
     converged : bool
         ``max_force <= ftol``.
     ftol : float
@@ -64,6 +68,7 @@ class MinimizeResult:
     factorizations: int = 0
     force_resolution: float = 0.0
     curved_steps: int = 0
+    krylov_iterations: int = 0
 
 
 def max_force(grad) -> float:

@@ -68,6 +68,13 @@ FALLBACK = "auto"
 EXACT_FALLBACK_ABOVE = 1000
 EXACT_SHIFT_DESCENTS = 4
 FALLBACKS = ("auto", "projected", "exact")
+#: Wires of more than this many segments take Newton's accurate steps
+#: (``newton(accurate_steps=True)``: truncated CG on the element-form product where the
+#: assembled Hessian cannot resolve τ). Measured (docs/performance.md, "Accurate steps"): the
+#: smooth stages of the continuum wire buckle on time and converge at N = 5 × 10⁴ and 10⁵,
+#: where they could not. Like the exact fallback's threshold, it keeps every ramp of the
+#: reproduction and of the continuum study (N ≤ 1000) on the branches it has reached.
+ACCURATE_STEPS_ABOVE = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -191,9 +198,7 @@ def minimize_wire(
 
     if method == "newton":
         hess = energy.hessian_csc  # one bound method: the fallback below is this very object
-        return newton(
-            energy,
-            x0,
+        kw = dict(
             hess=hess,
             # contacts projected on their positive part; bending and stretching exact (measured:
             # projecting the joints too doubled the iterations of the default ramp). The exact
@@ -216,7 +221,9 @@ def minimize_wire(
             # element-form product (crumple.energy_action); on unless ACCURATE_STABILITY is off
             hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
             retract=_curved_retraction(energy) if curved else None,
+            accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
         )
+        return newton(energy, x0, **kw)
     if method == "powell":
         if rng is None:
             raise ValueError("Powell needs a random generator for its directions (rng=...)")
