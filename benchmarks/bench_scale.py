@@ -101,9 +101,10 @@ def bench_smooth(ns=(100, 1000, 2000, 10_000), curved=None):
         bent = next((i for i, s in enumerate(r.stages) if s.energy.bending > 1e-3), None)
         where = "never" if bent is None else f"at stage {bent} (λ = {ramp.lambdas[bent]:.3g})"
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+        cg = sum(s.result.krylov_iterations for s in r.stages)
         print(f"  N = {n:6d}: {sum(its):4d} iterations {its}, buckled {where}, {t:.2f} s CPU, "
               f"max RSS {rss:.2f} GiB, converged {sum(s.result.converged for s in r.stages)}/"
-              f"{len(r.stages)}", flush=True)  # fmt: skip
+              f"{len(r.stages)}, {cg} CG iterations of accurate steps", flush=True)  # fmt: skip
         for s in r.stages:
             if not s.result.converged:
                 print(f"    λ = {s.lam:.4g}: {s.result.message}", flush=True)

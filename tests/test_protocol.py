@@ -611,6 +611,32 @@ def test_the_straight_wire_buckles_on_time_where_the_assembled_mode_is_round_off
     assert "along the accurate Hessian product's mode" in rescued.stages[first].result.message
 
 
+def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeypatch):
+    """N = 2000, ftol = 10⁻⁹: below what float64 positions resolve (~4 × 10⁻⁶ there), so Newton
+    stops "converged to the force resolution" at ~10⁻⁶. The polish, Newton again in the
+    displacement from that point with the elastic forces from the segments' sums, reaches
+    ftol in one or two iterations; without it (``relax_polish.POLISH`` off) the stage is the
+    first pass, and a stage that reaches ftol is never polished."""
+    import crumple.relax_polish as rp
+
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=2000)
+    x = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[:8]), seed=0).stages[-1].positions
+    polished = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    assert polished.converged and polished.max_force <= 1e-9, polished.message
+    assert "polished in the displacement" in polished.message
+    monkeypatch.setattr(rp, "POLISH", False)
+    first = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    assert "converged to the force resolution" in first.message
+    assert first.max_force > 1e-7 and first.force_resolution > 1e-9
+    assert polished.iterations - first.iterations in (1, 2, 3)
+    assert abs(polished.energy - first.energy) <= 1e-12 * abs(first.energy)
+    assert float(np.max(np.hypot(*(polished.x - first.x).T))) < 1e-6
+    assert not has_crossings(polished.x)
+    monkeypatch.setattr(rp, "POLISH", True)
+    plain = relax.minimize_wire(wire, x, 10.0, ftol=1e-5)
+    assert plain.converged and "polish" not in plain.message
+
+
 def _lowest_curvature_per_length(wire, stage):
     """Lowest eigenvalue of the pencil (H, M) (M: node lengths) by dense LAPACK, an estimate
     independent of the solver's inertia count."""

@@ -19,6 +19,7 @@ from .geometry.crossings import _has_crossings
 from .geometry.curved import _curved_step
 from .minimize import MinimizeResult, newton, powell
 from .model import Wire
+from .relax_polish import _needs_polish, _polished
 
 __all__ = ["CURVED_STEPS", "POWELL_RTOL", "STABILITY_TOL", "minimize_wire", "node_lengths"]
 
@@ -70,7 +71,8 @@ EXACT_SHIFT_DESCENTS = 4
 FALLBACKS = ("auto", "projected", "exact")
 #: Wires of more than this many segments take Newton's accurate steps
 #: (``newton(accurate_steps=True)``: truncated CG on the element-form product where the
-#: assembled Hessian cannot resolve τ). Measured (docs/performance.md, "Accurate steps"): the
+#: assembled Hessian cannot resolve τ) and the polish of a stage stopped at the force
+#: resolution (``relax_polish``). Measured (docs/performance.md, "Accurate steps"): the
 #: smooth stages of the continuum wire buckle on time and converge at N = 5 × 10⁴ and 10⁵,
 #: where they could not. Like the exact fallback's threshold, it keeps every ramp of the
 #: reproduction and of the continuum study (N ≤ 1000) on the branches it has reached.
@@ -223,7 +225,11 @@ def minimize_wire(
             retract=_curved_retraction(energy) if curved else None,
             accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
         )
-        return newton(energy, x0, **kw)
+        res = newton(energy, x0, **kw)
+        # a stage that stopped at the force resolution of its positions: Newton again in the
+        # displacement from its end, the elastic forces from the segments' sums (relax_polish)
+        large = wire.n_segments > ACCURATE_STEPS_ABOVE
+        return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
     if method == "powell":
         if rng is None:
             raise ValueError("Powell needs a random generator for its directions (rng=...)")

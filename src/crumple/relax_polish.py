@@ -1,0 +1,69 @@
+"""The polish of a Newton minimum that float64 positions cannot resolve: Newton again, in the
+displacement from it. Private; used by :func:`crumple.relax.minimize_wire`.
+
+A stage of a wire of N segments converges to the force resolution of its positions (the force
+a one-ulp move makes, ``MinimizeResult.force_resolution``), ~ 10 × 16 ε k_b/l0² |x| from the
+bending blocks: 2 × 10⁻² per node at N = 5 × 10⁴ against ftol = 10⁻⁶. Where a stage stopped
+there, :func:`_polished` minimises again in u = x − x₁ from its end point x₁, with the elastic
+terms from the segments' sums (:meth:`crumple.energy.WireEnergy.displaced`): the resolution of
+that pass is set by |u| (10⁻¹¹ after the first pass), not |x|. Every criterion is Newton's own
+(force, stability, the decrease test), in the displacement, on the same energy; the result is
+taken only if that pass converged with a lower largest force, else the first pass stands.
+
+What it does not change: the stage's positions are still float64 (x₁ + u rounded), so forces
+re-evaluated from them sit at the old resolution; the polish's ``max_force`` is that of the
+configuration x₁ + u (the sum in exact arithmetic). The hard core and the wall are evaluated at
+the rounded sum, so where their curvature dominates the resolution the polish gains nothing
+and the first pass stands.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .minimize import MinimizeResult, newton
+
+#: Polish a Newton stage that stopped above ftol with a force resolution above ftol
+#: (False: the engine before the tenth stop).
+POLISH = True
+#: The callables of ``newton`` that take the point as their first argument.
+_AT_POINT = ("hess", "feasible", "zero_modes", "hess_action", "step_limit", "barriers")
+
+
+def _needs_polish(first: MinimizeResult, ftol: float) -> bool:
+    """Whether the stage stopped at the force resolution of its positions, above ftol."""
+    return POLISH and first.max_force > ftol and first.force_resolution > ftol
+
+
+def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeResult:
+    """Newton in the displacement from ``first.x`` (``kw``: the first pass's keywords); the
+    polished result if it converged below the first's largest force, else ``first`` with the
+    attempt's cost and outcome added to its message."""
+    ref = np.array(first.x, dtype=np.float64)
+    kw = dict(kw, retract=None)  # straight steps: a short pass near a minimum
+
+    def at(c):
+        return None if c is None else (lambda u, *args: c(ref + u, *args))
+
+    same = kw.get("hess_fallback") is kw.get("hess")  # the exact fallback is H itself
+    for name in _AT_POINT:
+        kw[name] = at(kw.get(name))
+    kw["hess_fallback"] = kw["hess"] if same else at(kw.get("hess_fallback"))
+    res = newton(energy.displaced(ref), np.zeros_like(ref), **kw)
+    cost = {
+        "iterations": first.iterations + res.iterations,
+        "evaluations": first.evaluations + res.evaluations,
+        "hessian_evaluations": first.hessian_evaluations + res.hessian_evaluations,
+        "factorizations": first.factorizations + res.factorizations,
+        "krylov_iterations": first.krylov_iterations + res.krylov_iterations,
+        "curved_steps": first.curved_steps,
+    }
+    if res.converged and res.max_force < first.max_force:
+        message = (f"{res.message}; polished in the displacement ({res.iterations} iterations) "
+                   f"after a first pass of {first.iterations}: {first.message}")  # fmt: skip
+        return dataclasses.replace(res, x=ref + res.x, ftol=ftol, message=message, **cost)
+    message = (f"{first.message}; not polished ({res.iterations} iterations in the "
+               f"displacement: {res.message})")  # fmt: skip
+    return dataclasses.replace(first, message=message, **cost)
