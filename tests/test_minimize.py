@@ -723,18 +723,15 @@ def test_stability_below_the_assembled_resolution_is_decided_by_the_accurate_pro
     np.testing.assert_array_equal(r.x, 0.0)
 
 
-def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product(monkeypatch):
+def test_a_true_negative_curvature_is_not_hidden_by_the_accurate_product():
     """Soft spring negative (-0.1), H exact: x = 0 is a maximum along the uniform mode, the
     accurate product confirms the count, and the escape and the rest are those without it
-    (with the factor's steps); with the product's steps (``minimize_krylov``) the same escape
-    reaches the same minimum."""
-    import crumple.minimize_krylov as mk
-
+    (with the factor's steps, the default); with the product's steps (``accurate_steps``,
+    ``minimize_krylov``) the same escape reaches the same minimum."""
     fun, exact, action = stiff_chain(soft=-0.1)
     hess = lambda x: sp.csc_matrix(exact(x))  # noqa: E731
     blind = chain_newton(fun, hess)
-    stepped = chain_newton(fun, hess, hess_action=action)
-    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
+    stepped = chain_newton(fun, hess, hess_action=action, accurate_steps=True)
     r = chain_newton(fun, hess, hess_action=action)
     assert "escape" in blind.message
     assert r.message == blind.message
@@ -1144,17 +1141,15 @@ def test_forces_below_their_resolution_but_coherent_are_not_a_minimum():
     assert r.converged and r.max_force <= 1e-6 and r.energy < 1e-3 * fun(x0)[0]
 
 
-def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decrease(monkeypatch):
+def test_a_point_the_accurate_product_finds_stable_is_still_tested_for_its_decrease():
     """Where the assembled H cannot resolve τ and the accurate product decides stability (N ~
     10⁵), a point accepted only below the force floor must still pass the decrease test: the
     soft quartic of the chain above (every force below its resolution, yet coherent), in a
     metric that puts the assembled resolution above τ, and an 'assembled' H wrong along the
     uniform mode (a negative pivot that is round-off): the accurate product finds the point
     stable, but a Newton step from it predicts a decrease far above a one-ulp move's. (The
-    factor's steps, which stay there: the product's own steps leave it, test below.)"""
-    import crumple.minimize_krylov as mk
-
-    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
+    factor's steps, the default, which stay there: the product's own steps leave it, test
+    below.)"""
     fun, _, x0, kw = _wrong_along_the_uniform_mode()
     assert max_force(fun(x0)[1]) < 0.25 * _force_resolution(kw["hess"](x0), x0)
     r = newton(fun, x0, maxiter=3, **kw)
@@ -1173,14 +1168,16 @@ def test_the_accurate_steps_reach_the_minimum_the_factor_cannot(monkeypatch):
     import crumple.minimize_krylov as mk
 
     fun, _, x0, kw = _wrong_along_the_uniform_mode()
-    r = newton(fun, x0, maxiter=50, **kw)
+    r = newton(fun, x0, maxiter=50, accurate_steps=True, **kw)
     assert r.converged, r.message
     assert "stable by the accurate Hessian product" in r.message
     assert r.energy < 1e-5 and 0 < r.krylov_iterations <= 10 * r.iterations
-    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)
-    old = newton(fun, x0, maxiter=50, **kw)
+    old = newton(fun, x0, maxiter=50, **kw)  # the default: the factor's steps
     assert not old.converged and old.energy > 1e-2, old.message
     assert old.krylov_iterations == 0
+    monkeypatch.setattr(mk, "ACCURATE_STEPS", False)  # the module's switch overrides the call
+    off = newton(fun, x0, maxiter=50, accurate_steps=True, **kw)
+    assert off.krylov_iterations == 0 and off.energy == old.energy
 
 
 def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
@@ -1200,7 +1197,7 @@ def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
     f = LDLT().factorize(wrong, shift=shift)
     assert f.positive_definite
     e, g = fun(x0)
-    st = _State(x=x0, e=e, g=g, fmax=max_force(g), radius=np.inf)
+    st = _State(x=x0, e=e, g=g, fmax=max_force(g), radius=np.inf, accurate_steps=True)
     st.factor, st.model, st.hess_action = f, (wrong, shift), kw["hess_action"]
     p = -f.solve(g)
     s = _accurate_step(st, p, m, floor)

@@ -635,6 +635,13 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
     monkeypatch.setattr(rp, "POLISH", True)
     plain = relax.minimize_wire(wire, x, 10.0, ftol=1e-5)
     assert plain.converged and "polish" not in plain.message
+    # the stage's iteration budget holds for both passes, and a stage that ran out of it with
+    # forces above their resolution is not polished
+    short = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations - 1)
+    assert short.iterations <= first.iterations - 1 and "polish" not in short.message
+    assert short.max_force > short.force_resolution
+    budget = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations)
+    assert budget.iterations == first.iterations and "polish" not in budget.message
 
 
 def _lowest_curvature_per_length(wire, stage):

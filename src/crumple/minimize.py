@@ -82,7 +82,7 @@ def newton(
     hess_action: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
     shift_descents: int | None = None,
-    accurate_steps: bool = True,
+    accurate_steps: bool = False,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -206,8 +206,9 @@ def newton(
         With ``hess_action``, where the assembled H cannot resolve τ: the step is Steihaug's
         truncated CG on the product, preconditioned by the direction's factor, instead of the
         factor's own (``minimize_krylov``; at a saddle the factor's shift is set by round-off
-        and its step along the unstable mode is ~10⁻³ of the right one). Only where no
-        barrier spring acts on the step.
+        and its step along the unstable mode is ~10⁻³ of the right one). Only where
+        ``barriers`` lists no spring for the factor's step nor for the CG step. Off by default
+        (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
 
     Returns
     -------
@@ -343,8 +344,11 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
     st.it += 1
     p = _direction(st, hess, hess_fallback, ldl, floor, m)
     q = p if barriers is None else _barrier_step(st, p, barriers, ldl)
-    # with no spring in the step, the accurate product's where the assembled H cannot resolve
-    p = _accurate_step(st, p, m, floor) if q is p else q
+    if q is p:  # no spring: the accurate product's step where the assembled H cannot resolve
+        s = _accurate_step(st, p, m, floor)  # (p itself where it does not apply)
+        # a longer step may reach pairs p did not: then p, whose barriers were listed
+        q = p if s is p or (barriers is not None and len(barriers(st.x, s)[2])) else s
+    p = q
     if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
         p.reshape(-1)[st.mask] = 0.0
     if not all_finite(p):
@@ -471,7 +475,7 @@ class _State:
     curved: int = 0  # accepted steps that were the retracted (curved) point
     descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
-    accurate_steps: bool = True  # newton(accurate_steps=...)
+    accurate_steps: bool = False  # newton(accurate_steps=...)
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:

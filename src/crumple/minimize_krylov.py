@@ -13,10 +13,13 @@ buckle grows by ~0.1 % per iteration.
 product, accurate to round-off of the elements themselves) by conjugate gradients
 preconditioned by that factor: Steihaug's truncated CG (Steihaug, SIAM J. Numer. Anal. 20, 626
 (1983); Nocedal & Wright, Numerical Optimization, Alg. 7.2). From 0, every iterate is a descent
-direction; the solve stops at the trust radius (the line search caps the step there), or where
-the accurate H has negative curvature along the CG direction, and then steps along it to the
-trust radius (the unstable mode of a saddle). The factor stays the preconditioner only: on the
-stiff modes it is exact (CG converges in a few iterations), on the soft ones the product decides.
+direction; the solve stops once an iterate leaves the trust radius (that iterate is returned,
+and the line search scales the whole step back to the radius), or where the accurate H has
+negative curvature along the CG direction d: it then returns s + (Δ/|d|∞) d (the unstable mode
+of a saddle), or d itself at the first iteration. Both are descent directions but differ from
+Steihaug's boundary point (the root of |s + τd| = Δ), which would be up to 2× shorter; that
+variant was not measured. The factor stays the preconditioner only: on the stiff modes it is
+exact (CG converges in a few iterations), on the soft ones the product decides.
 """
 
 from __future__ import annotations
@@ -67,8 +70,11 @@ def _accurate_step(st, p, m, floor) -> np.ndarray:
         ad = np.asarray(st.hess_action(st.x, d), dtype=np.float64).ravel()
         dad = float(d @ ad)
         st.krylov += 1
-        if not dad > 0:  # negative curvature along d: to the trust radius along it
-            s = d if k == 0 else s + (st.radius / rows(d)) * d
+        if not dad > 0:  # negative curvature along d: along it, by the trust radius's length
+            if k == 0:
+                s = d  # the factor's step (scaled): the line search caps it at the radius
+            elif np.isfinite(st.radius):
+                s = s + (st.radius / rows(d)) * d
             break
         alpha = rz / dad
         s = s + alpha * d

@@ -25,7 +25,7 @@ import numpy as np
 
 from .minimize import MinimizeResult, newton
 
-#: Polish a Newton stage that stopped above ftol with a force resolution above ftol
+#: Polish a Newton stage that stopped with its forces above ftol but below their resolution
 #: (False: the engine before the tenth stop).
 POLISH = True
 #: The callables of ``newton`` that take the point as their first argument.
@@ -33,8 +33,11 @@ _AT_POINT = ("hess", "feasible", "zero_modes", "hess_action", "step_limit", "bar
 
 
 def _needs_polish(first: MinimizeResult, ftol: float) -> bool:
-    """Whether the stage stopped at the force resolution of its positions, above ftol."""
-    return POLISH and first.max_force > ftol and first.force_resolution > ftol
+    """Whether the stage stopped with its forces above ftol but below their resolution: at the
+    force resolution of its positions (converged so, or refused there by the decrease test). A
+    stage that stopped with larger forces (out of iterations, a failed line search) is not the
+    polish's to mend."""
+    return POLISH and ftol < first.max_force <= first.force_resolution
 
 
 def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeResult:
@@ -42,7 +45,10 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     polished result if it converged below the first's largest force, else ``first`` with the
     attempt's cost and outcome added to its message."""
     ref = np.array(first.x, dtype=np.float64)
-    kw = dict(kw, retract=None)  # straight steps: a short pass near a minimum
+    left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for both
+    if left < 1:
+        return first
+    kw = dict(kw, retract=None, maxiter=left)  # straight steps: a short pass near a minimum
 
     def at(c):
         return None if c is None else (lambda u, *args: c(ref + u, *args))
