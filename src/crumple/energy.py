@@ -48,14 +48,12 @@ from .energy_kernels import (
     _hessian_triplets,
     _hessian_values,
     _in_core,
-    _line_admissible,
-    _line_energy,
-    _line_prepare,
     _max_displacement,
     _same_pairs,
     _total_eg,
     _wall_eg,
 )
+from .energy_line import _line_admissible, _line_energy, _line_prepare
 from .geometry._input import _as_positions
 from .geometry.distance import _node_segment_pairs
 from .linalg import CSC
