@@ -206,14 +206,22 @@ def _accurate_resolved(st, model, modes, floor) -> tuple[bool, str]:
 
     noise = float(np.mean([0.5 * float(d @ d) * _rayleigh_unit(action, d) for d in _ulp_moves(st)]))
     g = np.asarray(st.g, dtype=np.float64).ravel()
-    q = None if modes is None else np.linalg.qr(modes)[0]
-    project = (lambda v: v) if q is None else (lambda v: v - q @ (q.T @ v))
+    project = _complement(modes)
     bound = _bound(st, noise)
     pre, ritz = model
     quad, why = _decrease_estimate(action, project(g), pre.solve, project, ritz, 2.0 * bound)
     if not why and 0.5 * quad > bound:  # stopped as soon as the lower bound passed the bound
         why = f"above {bound:.3g} (a lower bound: the solve stopped there)"
     return _verdict(st, 0.5 * quad, noise, why)
+
+
+def _complement(modes):
+    """The Euclidean projection on the complement of the columns of ``modes`` (x.size, k), or
+    the identity for None (:func:`crumple.minimize_modes._modes`)."""
+    if modes is None:
+        return lambda v: v
+    q = np.linalg.qr(modes)[0]
+    return lambda v: v - q @ (q.T @ v)
 
 
 def _rayleigh_unit(action, d) -> float:

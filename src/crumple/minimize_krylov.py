@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .minimize_accurate import _assembly_resolution
+from .minimize_accurate import _assembly_resolution, _complement
+from .minimize_modes import _modes
 from .minimize_result import max_force
 
 #: Take the truncated-CG step where the assembled H cannot resolve τ (its resolution
@@ -58,7 +59,9 @@ def _accurate_step(st, p, m, floor) -> np.ndarray:
     def rows(v):  # the trust radius's measure: the largest row displacement
         return max_force(v.reshape(shape)) if len(shape) == 2 else float(np.max(np.abs(v)))
 
-    project = _complement(st)
+    # the zero modes' accurate curvature is zero to round-off: a CG that read its sign as
+    # negative would step along a symmetry to the trust radius
+    project = _complement(_modes(st.zero_modes, st.x, m))
     r = project(-np.asarray(st.g, dtype=np.float64).ravel())
     s = np.zeros_like(r)
     z = project(f.solve(r))
@@ -88,16 +91,3 @@ def _accurate_step(st, p, m, floor) -> np.ndarray:
         d = z + (rz_new / rz) * d
         rz = rz_new
     return s.reshape(shape) if np.all(np.isfinite(s)) and np.any(s) else p
-
-
-def _complement(st):
-    """The projection on the complement of the zero modes at ``st.x`` (Euclidean; the identity
-    without them): along a symmetry's mode the accurate curvature is zero to round-off, and a
-    truncated CG that read its sign as negative would step along it to the trust radius."""
-    if st.zero_modes is None:
-        return lambda v: v
-    w = np.asarray(st.zero_modes(st.x), dtype=np.float64)
-    if w.size == 0:
-        return lambda v: v
-    q = np.linalg.qr(w.reshape(w.shape[0], -1).T)[0]
-    return lambda v: v - q @ (q.T @ v)
