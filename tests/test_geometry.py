@@ -29,6 +29,7 @@ from crumple.geometry import (
     segment_lengths,
     turning_angles,
 )
+from crumple.geometry.ccd import _max_safe_fraction, _max_safe_fraction_tree
 from crumple.geometry.crossings import _crossing_candidates
 
 # --------------------------------------------------------------------------------------------
@@ -553,6 +554,49 @@ def test_ccd_property_on_degenerate_grid_layouts(pts, moves, scale):
     if has_crossings(pos + 0.99 * step):
         assert t <= 0.99
     _assert_safe_path(pos, step, t, samples=30, fraction=0.8)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 80),
+    kind=st.sampled_from(["random", "smooth", "rigid", "grid"]),
+    amplitude=st.sampled_from([1e-3, 0.1, 1.0, 5.0, 50.0]),
+    leaf=st.sampled_from([1, 2, 3, 4, 8]),
+)
+def test_ccd_tree_gives_the_hash_s_fraction(seed, n, kind, amplitude, leaf):
+    """The tree for long steps returns the very number of the spatial hash (the candidates are
+    the hash's less pairs that cannot meet), on crumpled walks, grid layouts (collinear and
+    node-through-node motions) and random, smooth and rigid steps of up to 50 segments."""
+    rng = np.random.default_rng(seed)
+    if kind == "grid":
+        pos = np.cumsum(rng.integers(-1, 2, (n, 2)), axis=0).astype(float)
+        step = amplitude * rng.integers(-3, 4, (n, 2)).astype(float)
+    else:
+        pos = random_walk(rng, n, turn=2.5)
+        if kind == "random":
+            step = amplitude * rng.standard_normal(pos.shape)
+        elif kind == "smooth":
+            s = np.linspace(0.0, 1.0, len(pos))[:, None]
+            step = amplitude * np.sin(np.pi * s * rng.uniform(0.5, 3.0, 2) + rng.uniform(0, 6, 2))
+        else:
+            step = np.tile(amplitude * rng.standard_normal(2), (len(pos), 1))
+    assert step.shape == pos.shape
+    assert _max_safe_fraction_tree(pos, step, leaf) == _max_safe_fraction(pos, step)
+
+
+def test_ccd_tree_finds_the_contact_of_a_closing_hairpin():
+    """A hairpin of 2 × 300 segments whose arms close on each other: a step of 10⁴ segment
+    lengths per node takes the tree (``max_safe_fraction`` switches to it above
+    ``TREE_ABOVE`` segments), which stops it where the arms meet, as the hash does."""
+    n = 300
+    arm = np.linspace(0.0, 1.0, n + 1)
+    pos = np.r_[np.c_[arm, np.zeros(n + 1)], np.c_[arm[::-1][1:], np.full(n, 0.1)]]
+    step = np.zeros_like(pos)
+    step[n + 1 :, 1] = -1.0  # the upper arm falls onto the lower one: contact at t = 0.1
+    assert max_safe_fraction(pos, step) == pytest.approx(0.1, rel=1e-9)
+    assert _max_safe_fraction_tree(pos, step, 4) == _max_safe_fraction(pos, step)
+    _assert_safe_path(pos, step, 0.1)  # (past it the arms pass through each other)
 
 
 # --------------------------------------------------------------------------------------------
