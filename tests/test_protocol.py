@@ -473,6 +473,26 @@ def test_ramp_records_the_curved_steps_switch(monkeypatch):
     assert r.converged and sum(s.result.curved_steps for s in r.stages) > 0
 
 
+def test_the_curved_point_is_offered_only_for_turns_below_the_bound():
+    """A step that turns some segment by more than ``relax.CURVED_MAX_TURN`` (radians, the
+    linearised δφ = e × δe/|e|²) gets no curved point: there the linearised turn is no
+    approximation of the step (a jagged step of a noisy long wire turned segments by hundreds
+    of radians). Below it the point is :func:`crumple.geometry.curved_step`'s."""
+    from crumple.geometry import curved_step
+    from crumple.geometry.curved import _largest_turn
+
+    wire = Wire(k_b=5, k_s=5e5, n_segments=10)
+    x = np.c_[np.linspace(-0.5, 0.5, 11), np.zeros(11)]
+    p = np.zeros_like(x)
+    p[5, 1] = 0.1  # node 5 moves up by one segment length: both its segments turn by 1 rad
+    assert _largest_turn(x, p, 1.0) == pytest.approx(1.0)
+    assert _largest_turn(x, p, 0.5) == pytest.approx(0.5)
+    retract = relax._curved_retraction(WireEnergy(wire, lam=1.0))
+    below, above = 0.5 * relax.CURVED_MAX_TURN, 1.5 * relax.CURVED_MAX_TURN
+    np.testing.assert_array_equal(retract(x, p, below), curved_step(x, p, below))
+    assert retract(x, p, above) is None
+
+
 def test_minimize_wire_input_checks():
     crossing = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, -1]], dtype=float)
     wire = Wire(k_b=1, k_s=1e4, n_segments=4)

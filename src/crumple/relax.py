@@ -16,7 +16,7 @@ from .energy import WireEnergy, confinement_weights
 from .geometry import disc_exit_fraction, has_crossings
 from .geometry.ccd import _safe_fraction
 from .geometry.crossings import _has_crossings
-from .geometry.curved import _curved_step
+from .geometry.curved import _curved_step, _largest_turn
 from .minimize import MinimizeResult, newton, powell
 from .model import Wire
 from .relax_polish import _needs_polish, _polished
@@ -51,6 +51,14 @@ ACCURATE_STABILITY = True
 #: reproduction and several seeds at N = 10³–10⁴ have been run with it (an earlier form lost
 #: a converged stage at N = 10⁴).
 CURVED_STEPS = False
+#: The curved point is offered only where no segment turns by more than this (radians, the
+#: linearised rotation δφ = e × δe/|e|² of :func:`crumple.geometry.curved_step`): beyond
+#: ~1 rad the linearised turn of a segment is no approximation of the step's (a step whose
+#: neighbouring nodes move apart by more than a segment turns it by many radians). Measured
+#: (eleventh stop): the first stage of the smooth ramp from the noisy straight wire at
+#: N = 5 × 10⁴ took 1246 iterations with curved points of up to hundreds of radians, 58 with
+#: this bound.
+CURVED_MAX_TURN = 1.0
 
 #: Newton's step where the exact Hessian H is indefinite (``minimize_wire(fallback=...)``):
 #: "projected", the Hessian with its contact blocks projected on their positive part, shifted
@@ -278,7 +286,9 @@ def _curved_retraction(energy: WireEnergy):
     def retract(x, p, alpha):
         if x is not last[0]:  # once per line search (its trials all start from x)
             last[0], last[1] = x, energy.touching(x)
-        return None if last[1] else _curved_step(x, p, alpha)
+        if last[1] or _largest_turn(x, p, alpha) > CURVED_MAX_TURN:
+            return None
+        return _curved_step(x, p, alpha)
 
     return retract
 

@@ -85,3 +85,15 @@ def _curved_step(x, p, alpha):
         y[i, 0] = x[i, 0] + alpha * p[i, 0] + (corr[i, 0] - mx)
         y[i, 1] = x[i, 1] + alpha * p[i, 1] + (corr[i, 1] - my)
     return y
+
+
+@njit(cache=True)
+def _largest_turn(x, p, alpha):
+    """The largest |δφ| = |e × δe|/|e|² over the segments of the step ``alpha * p``: the
+    linearised rotation :func:`curved_step` gives a segment (radians)."""
+    turn = 0.0
+    for i in range(x.shape[0] - 1):
+        ex, ey = x[i + 1, 0] - x[i, 0], x[i + 1, 1] - x[i, 1]
+        dx, dy = alpha * (p[i + 1, 0] - p[i, 0]), alpha * (p[i + 1, 1] - p[i, 1])
+        turn = max(turn, abs(ex * dy - ey * dx) / (ex * ex + ey * ey))
+    return turn
