@@ -15,8 +15,9 @@ near-degenerate contacts are never misclassified by round-off.
 
 The package has one module per concept: ``cells`` (the spatial hash), ``crossings`` (the exact
 intersection test), ``distance`` (distances, close pairs, the hard core's node-segment
-neighbour list, lengths and angles), ``ccd`` (continuous collision detection) and ``curved``
-(a step that turns segments instead of translating their ends). Everything
+neighbour list, lengths and angles), ``ccd`` (continuous collision detection: the spatial
+hash, and for long steps a tree along the chain that culls pairs by their relative motion)
+and ``curved`` (a step that turns segments instead of translating their ends). Everything
 public is imported from here.
 """
 

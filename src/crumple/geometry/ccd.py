@@ -1,4 +1,8 @@
-"""Continuous collision detection: how far every node may move along a direction."""
+"""Continuous collision detection: how far every node may move along a direction.
+
+Two broad phases with one narrow phase, so one answer: the spatial hash of swept boxes, and for
+steps long against the segments a tree along the chain (below).
+"""
 
 from __future__ import annotations
 
