@@ -172,8 +172,9 @@ def _max_safe_fraction(pos, step):
 # the hash's, less pairs that cannot meet, so the fraction is the same number (tested).
 
 
-#: Segments per leaf of the tree (measured, N = 10³ … 5 × 10⁴: 4 is within 1.5× of the best of
-#: 1, 2, 4 and 8 on every step tried, smooth, random and rigid, and the best on small steps).
+#: Segments per leaf of the tree (``benchmarks/bench_ccd.py``, N = 10² … 5 × 10⁴, a loaded
+#: machine: no leaf is the best on every step; 4 is within 2.5× of the best of 1, 2, 4 and 8 on
+#: each step tried; at 5 × 10⁴ a call at 4 costs ~50 ms, a smooth stage's iteration ~1 s).
 TREE_LEAF = 4
 #: The tree is used where the largest displacement exceeds this many mean segment lengths (the
 #: hash's cost grows with it, the tree's does not; measured: below ~4 the hash is up to 3×
