@@ -586,9 +586,9 @@ def test_ccd_tree_gives_the_hash_s_fraction(seed, n, kind, amplitude, leaf):
 
 
 def test_ccd_tree_finds_the_contact_of_a_closing_hairpin():
-    """A hairpin of 2 × 300 segments whose arms close on each other: a step of 10⁴ segment
-    lengths per node takes the tree (``max_safe_fraction`` switches to it above
-    ``TREE_ABOVE`` segments), which stops it where the arms meet, as the hash does."""
+    """A hairpin of 2 × 300 segments whose arms close on each other: the upper arm moves by
+    ~300 segment lengths, so ``max_safe_fraction`` takes the tree (above ``TREE_ABOVE``
+    segment extents), which stops it where the arms meet, as the hash does."""
     n = 300
     arm = np.linspace(0.0, 1.0, n + 1)
     pos = np.r_[np.c_[arm, np.zeros(n + 1)], np.c_[arm[::-1][1:], np.full(n, 0.1)]]

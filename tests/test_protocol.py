@@ -484,7 +484,7 @@ def test_the_curved_point_is_offered_only_for_turns_below_the_bound():
     wire = Wire(k_b=5, k_s=5e5, n_segments=10)
     x = np.c_[np.linspace(-0.5, 0.5, 11), np.zeros(11)]
     p = np.zeros_like(x)
-    p[5, 1] = 0.1  # node 5 moves up by one segment length: both its segments turn by 1 rad
+    p[5, 1] = 0.1  # node 5 moves up by a segment length: its segments turn by 1 rad (± ulp)
     assert _largest_turn(x, p, 1.0) == pytest.approx(1.0)
     assert _largest_turn(x, p, 0.5) == pytest.approx(0.5)
     retract = relax._curved_retraction(WireEnergy(wire, lam=1.0))

@@ -169,16 +169,19 @@ def _max_safe_fraction(pos, step):
 # a segment and its displacement are one convex combination of its ends'): a test in t per
 # axis. Pairs of tree nodes that fail it are dropped with all their descendants; pairs of
 # leaves that pass get the hash's narrow phase, with its swept-box filter. The candidates are
-# the hash's, less pairs that cannot meet, so the fraction is the same number (tested).
+# the hash's, less pairs that cannot meet, so the fraction is the same number (tested; within
+# float64's working range: beyond |x| ~ 1e75 the narrow phase's squares overflow, and the two can
+# differ on pairs whose narrow-phase answer is already garbage).
 
 
 #: Segments per leaf of the tree (``benchmarks/bench_ccd.py``, N = 10² … 5 × 10⁴, a loaded
 #: machine: no leaf is the best on every step; 4 is within 2.5× of the best of 1, 2, 4 and 8 on
 #: each step tried; at 5 × 10⁴ a call at 4 costs ~50 ms, a smooth stage's iteration ~1 s).
 TREE_LEAF = 4
-#: The tree is used where the largest displacement exceeds this many mean segment lengths (the
-#: hash's cost grows with it, the tree's does not; measured: below ~4 the hash is up to 3×
-#: faster on a packed spiral, above it the tree, by 10–10³× for steps of 10² segments).
+#: The tree is used where the largest displacement component exceeds this many mean segment
+#: extents (the max-norm, as ``_safe_fraction_kernel`` measures both). The hash's cost grows
+#: with it, the tree's does not; measured: below ~4 the hash is up to 3× faster on a packed
+#: spiral, above it the tree, by 10–10³× for steps of 10² segments.
 TREE_ABOVE = 4.0
 
 
