@@ -99,6 +99,16 @@ def _first_contact(p0x, p0y, dpx, dpy, a0x, a0y, dax, day, b0x, b0y, dbx, dby):
 
 
 @njit(cache=True)
+def _node_segment_contact(pos, step, k, j):
+    """:func:`_first_contact` of node k and segment j (nodes j, j + 1) moving by ``step``."""
+    return _first_contact(
+        pos[k, 0], pos[k, 1], step[k, 0], step[k, 1],
+        pos[j, 0], pos[j, 1], step[j, 0], step[j, 1],
+        pos[j + 1, 0], pos[j + 1, 1], step[j + 1, 0], step[j + 1, 1],
+    )  # fmt: skip
+
+
+@njit(cache=True)
 def _max_safe_fraction(pos, step):
     """Largest t in (0, 1] such that moving pos by t * step causes no node-segment contact."""
     n = pos.shape[0]
@@ -143,12 +153,7 @@ def _max_safe_fraction(pos, step):
                         continue
                     if lox[j] > phx or plx > hix[j] or loy[j] > phy or ply > hiy[j]:
                         continue
-                    t = _first_contact(
-                        pos[k, 0], pos[k, 1], step[k, 0], step[k, 1],
-                        pos[j, 0], pos[j, 1], step[j, 0], step[j, 1],
-                        pos[j + 1, 0], pos[j + 1, 1], step[j + 1, 0], step[j + 1, 1],
-                    )  # fmt: skip
-                    tmin = min(tmin, t)
+                    tmin = min(tmin, _node_segment_contact(pos, step, k, j))
     return min(tmin, 1.0)
 
 
@@ -283,12 +288,7 @@ def _leaf_pair(pos, step, node, seg, leaf, la, lb, tmin):
                 if (seg[j, 0] > node[k, 2] or node[k, 0] > seg[j, 2] or seg[j, 1] > node[k, 3]
                         or node[k, 1] > seg[j, 3]):  # fmt: skip
                     continue
-                t = _first_contact(
-                    pos[k, 0], pos[k, 1], step[k, 0], step[k, 1],
-                    pos[j, 0], pos[j, 1], step[j, 0], step[j, 1],
-                    pos[j + 1, 0], pos[j + 1, 1], step[j + 1, 0], step[j + 1, 1],
-                )  # fmt: skip
-                tmin = min(tmin, t)
+                tmin = min(tmin, _node_segment_contact(pos, step, k, j))
     return tmin
 
 
