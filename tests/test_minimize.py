@@ -1179,6 +1179,7 @@ def test_the_accurate_steps_reach_the_minimum_the_factor_cannot(monkeypatch):
     steps by round-off there and the stage stops after 20 points the decrease test refused
     (energy 0.043 above the minimum E = 0). Newton's step by truncated CG on the accurate
     product, preconditioned by that factor, converges (measured: 6 iterations, 6 CG)."""
+    import crumple.minimize_accurate as ma
     import crumple.minimize_krylov as mk
 
     fun, _, x0, kw = _wrong_along_the_uniform_mode()
@@ -1186,12 +1187,30 @@ def test_the_accurate_steps_reach_the_minimum_the_factor_cannot(monkeypatch):
     assert r.converged, r.message
     assert "stable by the accurate Hessian product" in r.message
     assert r.energy < 1e-5 and 0 < r.krylov_iterations <= 10 * r.iterations
+    monkeypatch.setattr(ma, "REFUSED_STEPS", False)  # (they mend it too: the test below)
     old = newton(fun, x0, maxiter=50, **kw)  # the default: the factor's steps
     assert not old.converged and old.energy > 1e-2, old.message
     assert old.krylov_iterations == 0
     monkeypatch.setattr(mk, "ACCURATE_STEPS", False)  # the module's switch overrides the call
     off = newton(fun, x0, maxiter=50, accurate_steps=True, **kw)
     assert off.krylov_iterations == 0 and off.energy == old.energy
+
+
+def test_a_refused_point_hands_its_own_step_to_the_next_iteration(monkeypatch):
+    """The chain the factor's steps cannot bring to its minimum (above), with the factor's
+    steps (no ``accurate_steps``): every point the decrease test refuses passes on the step
+    the test measured, the Galerkin solution of (H + τM)s = -g over the eigensolve's Ritz
+    block (``minimize_accurate.REFUSED_STEPS``), and the next iteration takes it: the minimum
+    E = 0 is reached. Without it the stage stops after 20 refused points, 0.043 above it."""
+    import crumple.minimize_accurate as ma
+
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    r = newton(fun, x0, maxiter=50, **kw)
+    assert r.converged and r.energy < 1e-5, r.message
+    assert r.krylov_iterations == 0  # not the accurate steps': the refused points'
+    monkeypatch.setattr(ma, "REFUSED_STEPS", False)
+    old = newton(fun, x0, maxiter=50, **kw)
+    assert not old.converged and old.energy > 1e-2, old.message
 
 
 def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
@@ -1221,6 +1240,84 @@ def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
     st.radius = 0.1 * np.abs(newton_step).max()
     short = _accurate_step(st, p, m, floor)
     assert float(g @ short) < 0 and np.abs(short).max() < np.abs(newton_step).max()
+
+
+def _spring_state(radius=np.inf):
+    """The chain of :func:`_wrong_along_the_uniform_mode` at its start, with the factor of its
+    'assembled' H (+ the fallback's shift) as the direction's, and the springs' step q of one
+    one-sided spring that holds x_0 from moving up by more than 10⁻³, which the step enters
+    (a = -e_0, r = -10⁻³, k = 10⁻²: as stiff as the soft mode)."""
+    from crumple.linalg import LDLT
+    from crumple.minimize import _State
+
+    fun, hess, x0, kw = _wrong_along_the_uniform_mode()
+    n = x0.size
+    wrong, shift = kw["hess"](x0), np.ones(n)
+    ldl = LDLT()
+    f = ldl.factorize(wrong, shift=shift)
+    e, g = fun(x0)
+    st = _State(x=x0, e=e, g=g, fmax=max_force(g), radius=radius, accurate_steps=True)
+    st.factor, st.model, st.hess_action = f, (wrong, shift), kw["hess_action"]
+    springs = (np.array([[0]]), np.array([[-1.0]]), np.array([-1e-3]), np.array([1e-2]))
+    q, ok = f.solve_springs(-f.solve(g), *springs)
+    assert ok
+    return st, ldl, hess(x0).toarray(), springs, q
+
+
+def test_the_accurate_spring_step_is_the_minimiser_of_the_accurate_spring_model():
+    """With contacts the step is the springs' model's (``minimize_barriers``), solved with the
+    factor; where the assembled H is wrong along a soft mode, so is that step. Refined by CG on
+    the accurate product with the springs active at it held (``_accurate_spring_step``), it is
+    the minimiser of gᵀs + ½ sᵀHs + k/2 (r - aᵀs)² with the accurate H (a dense solve here),
+    its spring still active; the factor's step is far from it along the soft mode."""
+    from crumple.minimize_krylov import _accurate_spring_step
+
+    st, ldl, h, springs, q = _spring_state()
+    index, value, offset, stiff = springs
+    m = np.full(q.size, 1e-9)
+    a = np.zeros(q.size)
+    a[index[0]] = value[0]
+    assert a @ q < offset[0]  # the factor's step enters the spring
+    exact = np.linalg.solve(h + stiff[0] * np.outer(a, a), -st.g + stiff[0] * offset[0] * a)
+    assert a @ exact < offset[0]  # and so does the accurate model's minimiser
+    s = _accurate_spring_step(st, q, springs, ldl, m, 1e-3 * m)
+    np.testing.assert_allclose(s, exact, rtol=1e-6, atol=1e-9 * np.abs(exact).max())
+    assert np.abs(q - exact).max() > 0.1 * np.abs(exact).max()  # the factor's step is not it
+    assert st.krylov > 0 and float(st.g @ s) < 0
+
+
+def test_the_accurate_spring_step_keeps_the_factor_s_step_where_it_does_not_apply(monkeypatch):
+    """The refinement is made only where the accurate steps are (the assembled H's resolution
+    above τ, ``accurate_steps``, the module's switch on): otherwise the springs' step q itself
+    is returned, and no CG iteration is spent."""
+    import crumple.minimize_krylov as mk
+
+    st, ldl, _, springs, q = _spring_state()
+    m = np.full(q.size, 1e-9)
+    assert mk._accurate_spring_step(st, q, springs, ldl, m, 1e6 * m) is q  # τ above it
+    monkeypatch.setattr(mk, "ACCURATE_SPRING_STEPS", False)
+    assert mk._accurate_spring_step(st, q, springs, ldl, m, 1e-3 * m) is q
+    assert st.krylov == 0
+
+
+def test_the_accurate_steps_reach_the_minimum_with_springs_listed(monkeypatch):
+    """The chain that the factor's steps cannot bring to its minimum (test above), now with a
+    caller's barrier listed at every step (a spring far away, never entered): the steps are
+    the springs' model's, which the accurate product refines as it does the plain Newton
+    step. Without the refinement (the engine before the twelfth stop) the stage stops short,
+    refused by the decrease test."""
+    import crumple.minimize_krylov as mk
+
+    import crumple.minimize_accurate as ma
+
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    far = (np.array([[0, 1]]), np.array([[1.0, -1.0]]), np.array([-1e3]), np.array([1e6]))
+    monkeypatch.setattr(ma, "REFUSED_STEPS", False)  # the refinement alone
+    r = newton(fun, x0, maxiter=50, accurate_steps=True, barriers=lambda x, p: far, **kw)
+    assert r.converged and r.energy < 1e-5, r.message
+    monkeypatch.setattr(mk, "ACCURATE_SPRING_STEPS", False)
+    old = newton(fun, x0, maxiter=50, accurate_steps=True, barriers=lambda x, p: far, **kw)
+    assert not old.converged and old.energy > 1e-2, old.message
 
 
 def _wrong_along_the_uniform_mode(n=200, metric=1e-9):

@@ -38,8 +38,8 @@ from .minimize_accurate import (
     _constrained_action,
     _recheck,
 )
-from .minimize_barriers import _barrier_step
-from .minimize_krylov import _accurate_step
+from .minimize_barriers import _barrier_step, _merged_rows
+from .minimize_krylov import _accurate_spring_step, _accurate_step
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
@@ -343,11 +343,19 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
     entries) and its line search; ``st`` updated; None, or why the iteration failed."""
     st.it += 1
     p = _direction(st, hess, hess_fallback, ldl, floor, m)
+    pending, st.pending = st.pending, None
+    taken = pending is not None and _takes(st, pending)
+    if taken:  # the refused point's own step (minimize_accurate.REFUSED_STEPS)
+        p = pending
     q = p if barriers is None else _barrier_step(st, p, barriers, ldl)
-    if q is p:  # no spring: the accurate product's step where the assembled H cannot resolve
-        s = _accurate_step(st, p, m, floor)  # (p itself where it does not apply)
+    if q is p and not taken:  # no spring: the accurate product's step where the assembled H
+        s = _accurate_step(st, p, m, floor)  # cannot resolve (p itself where it does not apply)
         # a longer step may reach pairs p did not: then p, whose barriers were listed
         q = p if s is p or (barriers is not None and len(barriers(st.x, s)[2])) else s
+    elif q is not p and st.springs is not None:  # the springs' step, refined with the product
+        s = _accurate_spring_step(st, q, st.springs, ldl, m, floor)
+        # kept only if it enters no pair the springs' step was not listed with
+        q = q if s is q or _merged_rows(st.springs, barriers(st.x, s))[1] else s
     p = q
     if st.mask is not None:  # zero already in exact arithmetic; made exact in floating point
         p.reshape(-1)[st.mask] = 0.0
@@ -355,6 +363,17 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
         return "could not make the Hessian positive definite (non-finite factor)"
     return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step,
                         retract)  # fmt: skip
+
+
+def _takes(st, step) -> bool:
+    """Whether the step handed on by a refused point (``minimize_accurate.REFUSED_STEPS``) is
+    taken: finite, a descent direction, zero on the fixed entries. Where the caller lists
+    barriers for it, the springs' model starts from it (its corrections by the factor: the
+    contacts' response is stiff and local, where the factor is exact)."""
+    flat = step.reshape(-1)
+    if not (all_finite(flat) and float(np.dot(st.g.ravel(), flat)) < 0.0):
+        return False
+    return st.mask is None or not np.any(flat[st.mask])
 
 
 def _result(st, ldl, ftol, message) -> MinimizeResult:
@@ -476,6 +495,8 @@ class _State:
     descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
     accurate_steps: bool = False  # newton(accurate_steps=...)
+    springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
+    pending: np.ndarray | None = None  # a refused point's step, for the next iteration
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:

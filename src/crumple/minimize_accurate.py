@@ -209,10 +209,15 @@ def _accurate_resolved(st, model, modes, floor) -> tuple[bool, str]:
     project = _complement(modes)
     bound = _bound(st, noise)
     pre, ritz = model
-    quad, why = _decrease_estimate(action, project(g), pre.solve, project, ritz, 2.0 * bound)
+    steps: list = []
+    quad, why = _decrease_estimate(action, project(g), pre.solve, project, ritz, 2.0 * bound,
+                                   steps)  # fmt: skip
     if not why and 0.5 * quad > bound:  # stopped as soon as the lower bound passed the bound
         why = f"above {bound:.3g} (a lower bound: the solve stopped there)"
-    return _verdict(st, 0.5 * quad, noise, why)
+    resolved, note = _verdict(st, 0.5 * quad, noise, why)
+    if not resolved and REFUSED_STEPS and steps and np.all(np.isfinite(steps[0])):
+        st.pending = -steps[0].reshape(st.x.shape)  # the next direction (minimize._newton_step)
+    return resolved, note
 
 
 def _complement(modes):
@@ -234,7 +239,16 @@ def _rayleigh_unit(action, d) -> float:
     return float(u @ action(u))
 
 
-def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
+#: A point the decrease test refuses (forces below their resolution, but a Newton step still
+#: pays) hands the test's own step, the Galerkin solution of (H + τM) s = -g over the
+#: eigensolve's Ritz block and the CG iterate (:func:`_decrease_estimate`), to the next Newton
+#: iteration as its direction (``minimize._newton_step``): along the soft modes the factor's
+#: preconditioner cannot see, that step is the one the test measured. False: the engine
+#: before the twelfth stop (the next direction the factor's, or its CG refinement).
+REFUSED_STEPS = True
+
+
+def _decrease_estimate(action, b, solve, project, ritz, above=np.inf, steps=None):
     """bᵀA⁻¹b in the subspace ``project`` keeps (b already in it), as a lower bound: (value, why).
 
     Conjugate gradients (:func:`_cg_quadratic`) preconditioned by ``solve`` (the factor of the
@@ -244,7 +258,9 @@ def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
     share of bᵀA⁻¹b (nearly all of it where the forces are coherent) hides behind a plateau of
     the estimate until the rest of the residual has fallen to its level. The value is then the
     Galerkin quadratic bᵀV(VᵀAV)⁻¹Vᵀb over V = [Y, s], s the CG solution: at least the CG
-    estimate (s ∈ V) and that of Y alone, and still at most bᵀA⁻¹b."""
+    estimate (s ∈ V) and that of Y alone, and still at most bᵀA⁻¹b. With ``steps`` (a list),
+    the Galerkin solution V(VᵀAV)⁻¹Vᵀb ≈ A⁻¹b is appended to it (the CG solution where
+    there is no Ritz block, or VᵀAV is not positive), whichever way the estimate ends."""
     y, ay = None, None
     if ritz is not None:
         ritz = np.column_stack([project(c) for c in np.asarray(ritz, float).T])
@@ -259,8 +275,12 @@ def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
         return z if y is None else z + y @ np.linalg.solve(cy, y.T @ r)
 
     est, s, why = _cg_quadratic(action, b, precondition, project, above)
-    if why or est > above or y is None:
+    early = bool(why) or est > above
+    if y is None or (early and steps is None):
+        if steps is not None:
+            steps.append(s)
         return est, why
+    cg = s
     s = s - y @ (y.T @ s)  # V = [Y, the part of s outside Y], orthonormal
     norm = float(np.linalg.norm(s))
     v, av = y, ay
@@ -269,8 +289,15 @@ def _decrease_estimate(action, b, solve, project, ritz, above=np.inf):
         av = np.column_stack([ay, project(action(s / norm))])
     w, u = np.linalg.eigh(_sym(v.T @ av))
     if not w[0] > 0:
-        return est, "a lower bound: the accurate H + τM is not positive on the Ritz block"
-    return max(est, float(np.sum((u.T @ (v.T @ b)) ** 2 / w))), ""
+        if steps is not None:
+            steps.append(cg)
+        return est, why or "a lower bound: the accurate H + τM is not positive on the Ritz block"
+    c = u.T @ (v.T @ b)
+    if steps is not None:
+        steps.append(v @ (u @ (c / w)))
+    if early:
+        return est, why
+    return max(est, float(np.sum(c**2 / w))), ""
 
 
 def _cg_quadratic(action, b, precondition, project, above=np.inf):

@@ -33,8 +33,9 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
     again with them, up to ``RELISTINGS`` listings in all. Every step kept is checked to be a
     descent direction (gᵀs < 0: the model's minimiser is one, because every r_i <= 0 makes the
     model zero at s = 0; a point the solve reached without the active set need not be). If
-    none is, p is kept.
+    none is, p is kept. ``st.springs``: the rows of the step kept (None: p kept).
     """
+    st.springs = None
     rows = barriers(st.x, p)
     if len(rows[2]) == 0:
         return p
@@ -45,6 +46,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
+        st.springs = _masked(st, rows)
         if listing + 1 == RELISTINGS or _equal(best, p):  # p unchanged: same listing
             break
         rows, grown = _merged_rows(rows, barriers(st.x, best))
@@ -59,10 +61,7 @@ def _spring_model_step(st, p, rows, ldl):
     through a packed region), one factorisation of H plus the active springs per round
     (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
     still not found. None: no step."""
-    index, value, offset, stiff = rows
-    if st.mask is not None:
-        value = np.array(value, dtype=np.float64)
-        value[st.mask[index]] = 0.0
+    index, value, offset, stiff = _masked(st, rows)
     s, ok = st.factor.solve_springs(p, index, value, offset, stiff)
     if not ok:
         if st.model is None:
@@ -70,6 +69,15 @@ def _spring_model_step(st, p, rows, ldl):
         start = s if all_finite(s) else p.ravel()
         s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, start)
     return s
+
+
+def _masked(st, rows):
+    """The springs' rows with their entries on the fixed coordinates (``st.mask``) zeroed."""
+    index, value, offset, stiff = rows
+    if st.mask is not None:
+        value = np.array(value, dtype=np.float64)
+        value[st.mask[index]] = 0.0
+    return index, value, offset, stiff
 
 
 def _merged_rows(rows, more):

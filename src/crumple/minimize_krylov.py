@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .linalg import CSC
+from .linalg_springs import _rows_dot, _spring_rhs, _with_springs
 from .minimize_accurate import _assembly_resolution, _complement
 from .minimize_modes import _modes
 from .minimize_result import max_force
@@ -34,60 +36,177 @@ from .minimize_result import max_force
 #: ``minimize_accurate._assembly_resolution`` above the stability tolerance) and a product is
 #: given. False: the factor's step everywhere (the engine before the tenth stop).
 ACCURATE_STEPS = True
+#: Refine the contact springs' model step with the accurate product, where the accurate
+#: steps apply (:func:`_accurate_spring_step`). False: the factor's spring step everywhere (the
+#: engine before the twelfth stop).
+ACCURATE_SPRING_STEPS = True
 #: Conjugate-gradient iterations per step at most (measured at N = 5 × 10⁴: 2–3 on average).
 ACCURATE_STEP_MAXITER = 50
-#: The solve has converged when rᵀz (the preconditioned residual's square) falls below this
-#: fraction of its value at 0.
+#: The solve has converged when the residual's largest row, the force the quadratic model
+#: predicts after the step, is below this fraction of the largest force (an inexact Newton
+#: step with a fixed forcing term: Dembo, Eisenstat & Steihaug, SIAM J. Numer. Anal. 19, 400
+#: (1982)).
+ACCURATE_STEP_FORCING = 1e-2
+#: What ends the solve: ``"residual"`` (above) or ``"preconditioned"``, rᵀz below
+#: ``ACCURATE_STEP_RTOL`` × its value at 0 (the engine before the twelfth stop). The factor's
+#: weights 1/σ on the soft modes make rᵀz blind to them: measured at N = 10⁵, λ = 192.9, the
+#: solve stopped there after ~11 iterations with the soft residual barely reduced, and the
+#: polish's force fell by 1 % per Newton iteration, each a full step.
+ACCURATE_STEP_STOP = "residual"
 ACCURATE_STEP_RTOL = 1e-10
+#: ``"model"``: Nash & Sofer's test (Oper. Res. Lett. 9, 219 (1990)), on the model's gain.
+ACCURATE_STEP_MODEL_TOL = 0.1
+
+
+def _applies(st, m, floor) -> bool:
+    """Whether the accurate product makes the step: ``st.hess_action`` given (and
+    ``newton(accurate_steps=True)``), the direction's factor positive definite with its sparse
+    matrix known (``st.model``), and the assembled H's resolution above τ = floor/m."""
+    if not (ACCURATE_STEPS and st.accurate_steps) or st.hess_action is None or st.model is None:
+        return False
+    return _assembly_resolution(st.model[0], m) > float(floor[0] / m[0])
 
 
 def _accurate_step(st, p, m, floor) -> np.ndarray:
-    """The truncated-CG step of the accurate H, or p where it does not apply.
-
-    It applies where ``st.hess_action`` is given (and ``newton(accurate_steps=True)``), the
-    direction's factor is positive definite
-    with its sparse matrix known (``st.model``), and the assembled H's resolution is above
-    τ = floor/m. Counts the CG iterations in ``st.krylov``."""
-    if not (ACCURATE_STEPS and st.accurate_steps) or st.hess_action is None or st.model is None:
+    """The truncated-CG step of the accurate H, or p where it does not apply
+    (:func:`_applies`). Counts the CG iterations in ``st.krylov``."""
+    if not _applies(st, m, floor):
         return p
-    tau = float(floor[0] / m[0])
-    if not _assembly_resolution(st.model[0], m) > tau:
-        return p
-    shape = p.shape
-    f = st.factor
-
-    def rows(v):  # the trust radius's measure: the largest row displacement
-        return max_force(v.reshape(shape)) if len(shape) == 2 else float(np.max(np.abs(v)))
-
-    # the zero modes' accurate curvature is zero to round-off: a CG that read its sign as
-    # negative would step along a symmetry to the trust radius
     project = _complement(_modes(st.zero_modes, st.x, m))
     r = project(-np.asarray(st.g, dtype=np.float64).ravel())
-    s = np.zeros_like(r)
+    s, d, k, why = _cg(st, lambda v: _product(st, v), st.factor, project, np.zeros_like(r), r,
+                       p.shape)  # fmt: skip
+    if why == "none":
+        return p
+    if why == "negative":  # along d by the trust radius's length (the factor's step at first)
+        if k == 0:
+            s = d  # the line search caps it at the radius
+        elif np.isfinite(st.radius):
+            s = s + (st.radius / _rows(d, p.shape)) * d
+    return s.reshape(p.shape) if np.all(np.isfinite(s)) and np.any(s) else p
+
+
+def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
+    """The springs' model step ``q`` (:func:`crumple.minimize_barriers._barrier_step`) refined
+    with the accurate product, or q where that does not apply (:func:`_applies`) or does not
+    lower the model.
+
+    ``springs`` = (index, value, offset, stiffness), the rows the step was found with. The
+    springs active at q (a_iᵀq < r_i) are held: the step is the minimiser of the quadratic
+    gᵀs + ½ sᵀHs + Σ_S k_i/2 (r_i - a_iᵀs)², H applied by the element-form product, by
+    conjugate gradients from q, preconditioned by the factor of the assembled H + shift plus
+    those springs (their rows lie in its pattern: the symbolic analysis is reused; one
+    factorisation), in the complement of the zero modes (the springs' rows are orthogonal to
+    the rigid motions). Where q's residual in that model already passes the solve's test, q
+    is kept without a factorisation. The CG stops at the trust radius or at negative
+    curvature, keeping its last iterate. The refined step is kept only if it is a descent
+    direction and lowers the piecewise model of every listed spring, evaluated with the
+    accurate product, below q's (docs/performance.md, "Accurate steps with contacts")."""
+    if not (ACCURATE_SPRING_STEPS and _applies(st, m, floor)):
+        return q
+    index, value, offset, stiff = springs
+    qf = np.asarray(q, dtype=np.float64).ravel()
+    active = _rows_dot(index, value, qf) < offset
+    zero = np.zeros_like(qf)
+
+    def held(v):  # Σ_S k_i a_i a_iᵀ v
+        return _spring_rhs(zero, index, value, _rows_dot(index, value, v), stiff, active)
+
+    g = np.asarray(st.g, dtype=np.float64).ravel()
+    hq = _product(st, qf)
+    project = _complement(_modes(st.zero_modes, st.x, m))
+    r = project(_spring_rhs(-g, index, value, offset, stiff, active) - hq - held(qf))
+    if _done(st, r, r, q.shape):
+        return q
+    f = _held_factor(st, ldl, springs, active)
+    if f is None:
+        return q
+    s, _, _, why = _cg(st, lambda v: _product(st, v) + held(v), f, project, qf, r, q.shape)
+    if why == "none" or not np.all(np.isfinite(s)) or not float(g @ s) < 0.0:
+        return q
+    before = _spring_model(g, qf, hq, index, value, offset, stiff)
+    after = _spring_model(g, s, _product(st, s), index, value, offset, stiff)
+    return s.reshape(q.shape) if after < before else q
+
+
+def _held_factor(st, ldl, springs, active):
+    """The factor of the direction's matrix plus the held springs (the direction's own where
+    none is held); None where a spring's rows fall outside its pattern or the sum is not
+    positive definite."""
+    if not active.any():
+        return st.factor
+    index, value, _, stiff = springs
+    a, shift = st.model
+    merged, ok = _with_springs(a.indptr, a.indices, np.ascontiguousarray(a.data), index, value,
+                               stiff, active)  # fmt: skip
+    if not ok:
+        return None
+    f = ldl.factorize(CSC(merged, a.indices, a.indptr), shift=shift)
+    return None if f.negative else f
+
+
+def _product(st, v) -> np.ndarray:
+    """The accurate H v, flat."""
+    return np.asarray(st.hess_action(st.x, v), dtype=np.float64).ravel()
+
+
+def _rows(v, shape) -> float:
+    """The trust radius's measure: the largest row displacement (or entry, for flat x)."""
+    return max_force(v.reshape(shape)) if len(shape) == 2 else float(np.max(np.abs(v)))
+
+
+def _done(st, r, rz, shape, rz0=None, gain=None) -> bool:
+    """The solve's test (:data:`ACCURATE_STEP_STOP`): the residual r's largest row below the
+    forcing term times the largest force, rᵀz below its tolerance times its value rz0, or
+    (``"model"``) the last iteration's gain in the quadratic model, times the iterations
+    made, below ``ACCURATE_STEP_MODEL_TOL`` × the gain so far (``gain`` = (last, total, k))."""
+    if ACCURATE_STEP_STOP == "preconditioned":
+        return rz0 is not None and rz < ACCURATE_STEP_RTOL * rz0
+    if ACCURATE_STEP_STOP == "model":
+        if gain is None:
+            return False
+        last, total, k = gain
+        return total > 0 and (k + 1) * last <= ACCURATE_STEP_MODEL_TOL * total
+    return _rows(r, shape) <= ACCURATE_STEP_FORCING * st.fmax
+
+
+def _cg(st, action, f, project, s, r, shape):
+    """Preconditioned CG on ``action`` s = b from s, r = b - action(s) (projected).
+
+    Returns (s, d, k, why): the iterate, the last direction, its index and why it stopped:
+    ``"converged"`` (:func:`_done`, or ``ACCURATE_STEP_MAXITER`` iterations), ``"radius"`` (the
+    iterate beyond the trust radius returned: the line search caps it), ``"negative"`` (dᵀAd
+    <= 0: s is the iterate before d), ``"none"`` (no residual to reduce). Counts the
+    iterations in ``st.krylov``."""
     z = project(f.solve(r))
     d = z.copy()
     rz = rz0 = float(r @ z)
     if not rz > 0:
-        return p
+        return s, d, 0, "none"
+    total = 0.0
     for k in range(ACCURATE_STEP_MAXITER):
-        ad = np.asarray(st.hess_action(st.x, d), dtype=np.float64).ravel()
+        ad = action(d)
         dad = float(d @ ad)
         st.krylov += 1
-        if not dad > 0:  # negative curvature along d: along it, by the trust radius's length
-            if k == 0:
-                s = d  # the factor's step (scaled): the line search caps it at the radius
-            elif np.isfinite(st.radius):
-                s = s + (st.radius / rows(d)) * d
-            break
+        if not dad > 0:
+            return s, d, k, "negative"
         alpha = rz / dad
         s = s + alpha * d
-        if rows(s) > st.radius:  # beyond the trust radius: the line search caps it there
-            break
+        if _rows(s, shape) > st.radius:
+            return s, d, k, "radius"
         r = project(r - alpha * ad)
         z = project(f.solve(r))
         rz_new = float(r @ z)
-        if rz_new < ACCURATE_STEP_RTOL * rz0:
+        last = 0.5 * alpha * rz  # the quadratic model's fall along this direction
+        total += last
+        if _done(st, r, rz_new, shape, rz0, (last, total, k)):
             break
         d = z + (rz_new / rz) * d
         rz = rz_new
-    return s.reshape(shape) if np.all(np.isfinite(s)) and np.any(s) else p
+    return s, d, k, "converged"
+
+
+def _spring_model(g, s, hs, index, value, offset, stiff) -> float:
+    """gᵀs + ½ sᵀ(Hs) + Σ_i k_i/2 max(0, r_i - a_iᵀs)², over every listed spring."""
+    gap = np.maximum(0.0, offset - _rows_dot(index, value, s))
+    return float(g @ s + 0.5 * (s @ hs) + 0.5 * np.sum(stiff * gap * gap))
