@@ -1022,6 +1022,51 @@ def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(s
     assert len(energy.barriers(inside, step)[2]) == 0
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_releasing_rows_take_out_the_curvature_of_the_pairs_a_step_releases(seed):
+    """The staggered hairpin 0.9 d apart (every pair inside the core, u = 0.9): raising strand
+    B by 0.5 d takes each of its 2m - 1 pairs out of the core, so with ``releasing=True`` each
+    gets the row -∇D (finite differences), offset D - d = -0.1 d and stiffness
+    -ε b''(u)/d² = -2ε/(u³d²) (b'' by differences of b), minus the ∇D ∇Dᵀ coefficient of the
+    pair's Hessian block: once such a spring acts the model has no curvature left for the
+    pair, as the energy has none beyond d. A step towards the core releases none; with
+    ``releasing`` off none is listed either."""
+    from crumple.geometry import point_segment_distance
+
+    m, seg, d, eps = 5, 0.01, 1e-5, 1e-3
+    pos = staggered_hairpin(m, seg, 0.9 * d)
+    w = Wire(k_b=1.0, k_s=1e3, n_segments=2 * m, hard_core=d, hard_core_energy=eps)
+    energy = WireEnergy(w, lam=1.0)
+    step = np.zeros_like(pos)
+    step[m + 1 :, 1] = 0.5 * d
+    assert len(energy.barriers(pos, step)[2]) == 0
+    index, value, offset, stiff = energy.barriers(pos, step, releasing=True)
+    assert len(offset) == 2 * m - 1
+    np.testing.assert_allclose(offset, -0.1 * d, rtol=1e-6)
+    np.testing.assert_allclose(stiff, -2 * eps / (0.9**3 * d**2), rtol=1e-6)
+    rng = np.random.default_rng(seed)
+    v = rng.standard_normal(pos.shape)
+    h = 1e-10
+    for row, val in zip(index, value, strict=True):
+        k, j = row[0] // 2, row[2] // 2
+
+        def dist(x, k=k, j=j):
+            return point_segment_distance(x[k], x[j], x[j + 1])
+
+        fd = (dist(pos + h * v) - dist(pos - h * v)) / (2 * h)
+        assert -val @ v.ravel()[row] == pytest.approx(fd, rel=1e-5, abs=1e-9)
+        # the linearised distance after the step is beyond d exactly when (-a)ᵀs < D - d
+        assert val @ step.ravel()[row] < offset[0]
+    # -stiffness is ε/d² times the barrier's second derivative at u (differences of b)
+    from crumple.energy_kernels import _barrier
+
+    du = 1e-4
+    b2 = (_barrier(0.9 + du)[0] - 2 * _barrier(0.9)[0] + _barrier(0.9 - du)[0]) / du**2
+    np.testing.assert_allclose(-stiff, eps * b2 / d**2, rtol=1e-6)
+    toward = energy.barriers(pos, -step, releasing=True)
+    assert not np.any(toward[3] < 0)
+
+
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), ndof=st.integers(1, 120), t=st.integers(0, 1500))
 def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):

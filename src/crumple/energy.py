@@ -49,6 +49,7 @@ from .energy_kernels import (
     _hessian_values,
     _in_core,
     _max_displacement,
+    _release_rows,
     _same_pairs,
     _total_eg,
     _wall_eg,
@@ -534,7 +535,7 @@ class WireEnergy:
         ks, js = (self._ks, self._js) if self._ks is not None else self._pairs(x)
         return bool(_in_core(x, ks, js, self.wire.hard_core))
 
-    def barriers(self, x, step):
+    def barriers(self, x, step, *, releasing: bool = False):
         """The hard-core barriers that ``step`` may enter from ``x``, for the Newton model.
 
         Returns ``(index, value, offset, stiffness)`` as :func:`crumple.minimize.newton`'s
@@ -542,6 +543,13 @@ class WireEnergy:
         that the step, linearised, brings to within d + ``BARRIER_MARGIN`` (D - d): a = ∇D,
         r = d - D, and the barrier's curvature at its edge, k = ε b''(1)/d² = 2ε/d². The model
         then sees a contact before the step reaches it; the energy itself is unchanged.
+
+        ``releasing``: also the pairs now inside the core that the step, linearised, takes to
+        beyond d - ``BARRIER_MARGIN`` (d - D): a row -a, offset -(d - D) < 0 and the stiffness
+        -ε b''(u)/d², the curvature along a that the pair's block gives the Hessian. The model
+        then loses that curvature where the step takes the pair out of the core, where the
+        energy has none (the barrier's second derivative jumps from 2ε/d² to 0 at D = d):
+        H + Σ k_i a_i a_iᵀ stays positive definite when H is, because H holds that curvature.
         """
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
@@ -552,7 +560,16 @@ class WireEnergy:
         )  # fmt: skip
         stiffness = np.empty(offset.shape[0])
         stiffness.fill(2.0 * w.hard_core_energy / w.hard_core**2)
-        return index, value, offset, stiffness
+        if not releasing:
+            return index, value, offset, stiffness
+        out, more, less, u = _release_rows(
+            x, np.ascontiguousarray(step, dtype=np.float64).reshape(x.shape), ks, js, w.hard_core,
+            BARRIER_MARGIN,
+        )  # fmt: skip
+        # the curvature the pair's block has along a: ε b''(u)/d², b''(u) = 2/u³, removed
+        soft = -2.0 * w.hard_core_energy / (w.hard_core**2 * u**3)
+        return (np.concatenate([index, out]), np.concatenate([value, more]),
+                np.concatenate([offset, less]), np.concatenate([stiffness, soft]))  # fmt: skip
 
 
 #: The pairs :meth:`WireEnergy.barriers` lists: those the step brings, linearised, to within

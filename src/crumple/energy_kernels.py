@@ -547,3 +547,46 @@ def _barrier_rows(pos, step, ks, js, width, margin=-1.0):
         offset[c] = width - dist
         c += 1
     return index[:c], value[:c], offset[:c]
+
+
+@njit(cache=True)
+def _release_rows(pos, step, ks, js, width, margin):
+    """Candidate pairs inside the core (D < d) that ``step``, linearised, takes to beyond
+    d - margin (d - D): the pairs the step may release. Each gets the row -a = -∇D, the offset
+    -(d - D) < 0 and its u = D/d, so that the linearised distance after a step s is beyond d
+    exactly when (-a)ᵀs < -(d - D): in the form of :func:`_barrier_rows`' springs, which the
+    Newton model adds with a negative stiffness (:meth:`crumple.energy.WireEnergy.barriers`).
+    """
+    m = ks.shape[0]
+    index = np.empty((m, 6), dtype=np.int64)
+    value = np.empty((m, 6))
+    offset = np.empty(m)
+    u = np.empty(m)
+    c = 0
+    for q in range(m):
+        k, j = ks[q], js[q]
+        dist, t, vx, vy = _point_segment(
+            pos[k, 0], pos[k, 1], pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
+        )
+        if dist >= width or dist <= 0.0:
+            continue
+        sk = math.sqrt(step[k, 0] ** 2 + step[k, 1] ** 2)
+        sa = math.sqrt(step[j, 0] ** 2 + step[j, 1] ** 2)
+        sb = math.sqrt(step[j + 1, 0] ** 2 + step[j + 1, 1] ** 2)
+        if dist + sk + max(sa, sb) < width:
+            continue
+        nx, ny = vx / dist, vy / dist
+        lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
+        lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
+        if lin <= width - margin * (width - dist):
+            continue
+        index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
+        index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
+        index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
+        value[c, 0], value[c, 1] = -nx, -ny
+        value[c, 2], value[c, 3] = (1.0 - t) * nx, (1.0 - t) * ny
+        value[c, 4], value[c, 5] = t * nx, t * ny
+        offset[c] = dist - width
+        u[c] = dist / width
+        c += 1
+    return index[:c], value[:c], offset[:c], u[:c]

@@ -85,6 +85,14 @@ FALLBACKS = ("auto", "projected", "exact")
 #: where they could not. Like the exact fallback's threshold, it keeps every ramp of the
 #: reproduction and of the continuum study (N ≤ 1000) on the branches it has reached.
 ACCURATE_STEPS_ABOVE = 1000
+#: Opt-in (None: off): above this many segments the contact springs of the Newton model also
+#: release: a pair in the core that a step takes out of it loses the curvature its barrier
+#: gives the Hessian (``WireEnergy.barriers(releasing=True)``). Why: at N = 10⁵, λ = 192.9
+#: (twelfth stop, docs/performance.md "Contact stages at N = 10⁵") the ~200 pairs in the
+#: core sit within 3 × 10⁻⁵ d of its edge, where the barrier's curvature jumps from 2ε/d² to
+#: 0. Measured: that stage still did not converge with it, and the default N = 100 ramp took
+#: 3–10 % fewer iterations but ~50 % more CPU (seeds 0–2), so it is not on by default.
+RELEASE_ABOVE: int | None = None
 
 Method = Literal["newton", "powell"]
 
@@ -226,7 +234,7 @@ def minimize_wire(
             metric=node_lengths(wire),
             zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
             fixed=fixed,
-            barriers=energy.barriers if anticipate_contacts else None,
+            barriers=_barriers(energy, wire) if anticipate_contacts else None,
             # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
             # element-form product (crumple.energy_action); on unless ACCURATE_STABILITY is off
             hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
@@ -273,6 +281,14 @@ def resolve_fallback(fallback: str | None, wire: Wire) -> str:
     if fallback == "auto":
         return "exact" if wire.n_segments > EXACT_FALLBACK_ABOVE else "projected"
     return fallback
+
+
+def _barriers(energy, wire):
+    """The contact springs of the Newton model (:meth:`WireEnergy.barriers`), releasing above
+    :data:`RELEASE_ABOVE` segments (opt-in)."""
+    if RELEASE_ABOVE is not None and wire.n_segments > RELEASE_ABOVE:
+        return lambda x, step: energy.barriers(x, step, releasing=True)
+    return energy.barriers
 
 
 def _curved_retraction(energy: WireEnergy):
