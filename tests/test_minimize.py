@@ -1306,9 +1306,8 @@ def test_the_accurate_steps_reach_the_minimum_with_springs_listed(monkeypatch):
     the springs' model's, which the accurate product refines as it does the plain Newton
     step. Without the refinement (the engine before the twelfth stop) the stage stops short,
     refused by the decrease test."""
-    import crumple.minimize_krylov as mk
-
     import crumple.minimize_accurate as ma
+    import crumple.minimize_krylov as mk
 
     fun, _, x0, kw = _wrong_along_the_uniform_mode()
     far = (np.array([[0, 1]]), np.array([[1.0, -1.0]]), np.array([-1e3]), np.array([1e6]))

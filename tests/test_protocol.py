@@ -806,18 +806,21 @@ def test_the_fallback_enters_the_run_id_as_the_path_the_run_takes(monkeypatch):
         relax.minimize_wire(small, np.zeros((small.n_nodes, 2)), 1.0, fallback="modified")
 
 
-def test_the_opt_in_releasing_springs_reach_equilibria_without_crossings(monkeypatch):
-    """``relax.RELEASE_ABOVE`` (opt-in) adds to the Newton model's contact springs those of the
-    pairs a step takes out of the core, with the curvature of their barrier removed: only the
-    path changes, so a contact ramp still ends every stage converged and stable, uncrossed,
-    and the model's barriers are the releasing ones exactly when it is set."""
+def test_the_releasing_springs_reach_equilibria_without_crossings(monkeypatch):
+    """``relax.RELEASE_ABOVE`` (above 10³ segments by default) adds to the Newton model's
+    contact springs those of the pairs a step takes out of the core, with the curvature of
+    their barrier removed: only the path changes, so a contact ramp still ends every stage
+    converged and stable, uncrossed, and the model's barriers are the releasing ones exactly
+    above the threshold."""
     import crumple.relax as rx
     from crumple.energy import WireEnergy
     from crumple.geometry import has_crossings
 
     wire = Wire(k_b=5, k_s=5e5, n_segments=40)
     energy = WireEnergy(wire, 1.0)
-    assert rx._barriers(energy, wire) == energy.barriers  # off by default
+    assert rx._barriers(energy, wire) == energy.barriers  # not at 40 segments by default
+    monkeypatch.setattr(rx, "RELEASE_ABOVE", None)
+    assert rx._barriers(energy, wire) == energy.barriers
     monkeypatch.setattr(rx, "RELEASE_ABOVE", 0)
     assert rx._barriers(energy, wire) != energy.barriers
     r = run_ramp(wire, Ramp(lambdas=(1.0, 100.0, 1000.0, 3000.0)), seed=2)
