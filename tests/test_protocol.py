@@ -810,8 +810,8 @@ def test_the_releasing_springs_reach_equilibria_without_crossings(monkeypatch):
     """``relax.RELEASE_ABOVE`` (above 10³ segments by default) adds to the Newton model's
     contact springs those of the pairs a step takes out of the core, with the curvature of
     their barrier removed: only the path changes, so a contact ramp still ends every stage
-    converged and stable, uncrossed, and the model's barriers are the releasing ones exactly
-    above the threshold."""
+    converged and stable, uncrossed; the model's barriers are the releasing ones exactly above
+    the threshold, and releasing rows (negative stiffness) are listed on the way."""
     import crumple.relax as rx
     from crumple.energy import WireEnergy
     from crumple.geometry import has_crossings
@@ -823,7 +823,18 @@ def test_the_releasing_springs_reach_equilibria_without_crossings(monkeypatch):
     assert rx._barriers(energy, wire) == energy.barriers
     monkeypatch.setattr(rx, "RELEASE_ABOVE", 0)
     assert rx._barriers(energy, wire) != energy.barriers
+    listed = []
+    original = WireEnergy.barriers
+
+    def counting(self, x, step, **kw):  # the releasing rows (negative stiffness) the model got
+        rows = original(self, x, step, **kw)
+        if kw.get("releasing"):
+            listed.append(int(np.sum(rows[3] < 0)))
+        return rows
+
+    monkeypatch.setattr(WireEnergy, "barriers", counting)
     r = run_ramp(wire, Ramp(lambdas=(1.0, 100.0, 1000.0, 3000.0)), seed=2)
     assert r.converged, [s.result.message for s in r.stages]
     assert all(not has_crossings(s.positions) for s in r.stages)
     assert r.stages[-1].energy.hard_core > 0  # the last stage is in contact
+    assert sum(listed) > 0  # and the model was offered releasing springs on the way

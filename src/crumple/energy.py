@@ -548,8 +548,12 @@ class WireEnergy:
         beyond d - ``BARRIER_MARGIN`` (d - D): a row -a, offset -(d - D) < 0 and the stiffness
         -ε b''(u)/d², the curvature along a that the pair's block gives the Hessian. The model
         then loses that curvature where the step takes the pair out of the core, where the
-        energy has none (the barrier's second derivative jumps from 2ε/d² to 0 at D = d):
-        H + Σ k_i a_i a_iᵀ stays positive definite when H is, because H holds that curvature.
+        energy has none (the barrier's second derivative jumps from 2ε/d² to 0 at D = d).
+        The model is then not convex in general: removing that curvature can leave H + Σ k_i
+        a_i a_iᵀ indefinite where the contacts are what made H positive definite (a review
+        found one on a compressed hairpin). The springs' solvers may then stop short or at a
+        saddle of the model; every step is still checked to be a descent direction, and the
+        line search to lower the energy, so only the step's quality is at stake.
         """
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)

@@ -206,8 +206,9 @@ def newton(
         With ``hess_action``, where the assembled H cannot resolve τ: the step is Steihaug's
         truncated CG on the product, preconditioned by the direction's factor, instead of the
         factor's own (``minimize_krylov``; at a saddle the factor's shift is set by round-off
-        and its step along the unstable mode is ~10⁻³ of the right one). Only where
-        ``barriers`` lists no spring for the factor's step nor for the CG step. Off by default
+        and its step along the unstable mode is ~10⁻³ of the right one). Where ``barriers``
+        lists springs, the springs' step is refined by CG on the product instead
+        (``minimize_krylov._accurate_spring_step``). Off by default
         (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
 
     Returns

@@ -91,7 +91,8 @@ ACCURATE_STEPS_ABOVE = 1000
 #: (twelfth stop, docs/performance.md "Contact stages at N = 10⁵") the ~200 pairs in the
 #: core sit within 3 × 10⁻⁵ d of its edge, where the barrier's curvature jumps from 2ε/d² to
 #: 0. Measured: with it that stage converged in 59 iterations (without it, not in 860 s of
-#: CPU), and the N = 10⁴ curved ramp took 1429 iterations instead of 2037, 44/44. Not below:
+#: CPU); the N = 10⁴ ramps 44/44 either way, curved 1429 iterations instead of 2037 (313 s
+#: against 272 s CPU, more jobs beside it), straight 309 s against 302 s. Not below:
 #: the default N = 100 ramp took 3–10 % fewer iterations but ~50 % more CPU (seeds 0–2), and
 #: the reproduction keeps its iterates.
 RELEASE_ABOVE: int | None = 1000
