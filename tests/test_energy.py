@@ -987,13 +987,31 @@ def test_rest_angles_are_validated():
 # --------------------------------------------------------------------------------------------
 
 
+def _distance_rows_by_differences(pos, index, value, seed, h, sign):
+    """Check that each row is ``sign`` × ∇D of its (node, segment) pair, against central
+    differences of the exact distance along a random direction; the pairs' distances."""
+    from crumple.geometry import point_segment_distance
+
+    v = np.random.default_rng(seed).standard_normal(pos.shape)
+    distances = []
+    for row, val in zip(index, value, strict=True):
+        k, j = row[0] // 2, row[2] // 2
+
+        def dist(x, k=k, j=j):
+            return point_segment_distance(x[k], x[j], x[j + 1])
+
+        fd = (dist(pos + h * v) - dist(pos - h * v)) / (2 * h)
+        assert sign * (val @ v.ravel()[row]) == pytest.approx(fd, rel=1e-5, abs=1e-9)
+        distances.append(dist(pos))
+    return distances
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(seed):
     """Staggered hairpin 3d apart: lowering strand B by 2.5 d could bring each of its 2m - 1
     pairs inside the core, so each gets a row a = ∇D (checked by finite differences of the
     exact node-segment distance), offset d - D = -2d and stiffness ε b''(1)/d² = 2ε/d²;
     a step of 0.5 d reaches none; pairs already inside the core are the Hessian's, not rows."""
-    from crumple.geometry import point_segment_distance
 
     m, seg, d, eps = 5, 0.01, 1e-5, 1e-3
     pos = staggered_hairpin(m, seg, 3 * d)
@@ -1005,18 +1023,9 @@ def test_barrier_rows_are_the_distance_gradients_of_the_pairs_a_step_can_reach(s
     assert len(offset) == 2 * m - 1
     np.testing.assert_allclose(offset, -2 * d, rtol=1e-9)
     np.testing.assert_allclose(stiff, 2 * eps / d**2)
-    rng = np.random.default_rng(seed)
-    v = rng.standard_normal(pos.shape)
-    h = 1e-9
-    for row, val in zip(index, value, strict=True):
-        k, j = row[0] // 2, row[2] // 2
-
-        def dist(x, k=k, j=j):
-            return point_segment_distance(x[k], x[j], x[j + 1])
-
-        fd = (dist(pos + h * v) - dist(pos - h * v)) / (2 * h)
-        assert val @ v.ravel()[row] == pytest.approx(fd, rel=1e-5, abs=1e-9)
-        assert dist(pos) + val @ step.ravel()[row] == pytest.approx(0.5 * d, rel=1e-6)
+    distances = _distance_rows_by_differences(pos, index, value, seed, 1e-9, 1.0)
+    for dist, row, val in zip(distances, index, value, strict=True):
+        assert dist + val @ step.ravel()[row] == pytest.approx(0.5 * d, rel=1e-6)
     assert len(energy.barriers(pos, 0.2 * step)[2]) == 0
     inside = staggered_hairpin(m, seg, 0.5 * d)
     assert len(energy.barriers(inside, step)[2]) == 0
@@ -1031,7 +1040,6 @@ def test_releasing_rows_take_out_the_curvature_of_the_pairs_a_step_releases(seed
     pair's Hessian block: once such a spring acts the model has no curvature left for the
     pair, as the energy has none beyond d. A step towards the core releases none; with
     ``releasing`` off none is listed either."""
-    from crumple.geometry import point_segment_distance
 
     m, seg, d, eps = 5, 0.01, 1e-5, 1e-3
     pos = staggered_hairpin(m, seg, 0.9 * d)
@@ -1044,17 +1052,8 @@ def test_releasing_rows_take_out_the_curvature_of_the_pairs_a_step_releases(seed
     assert len(offset) == 2 * m - 1
     np.testing.assert_allclose(offset, -0.1 * d, rtol=1e-6)
     np.testing.assert_allclose(stiff, -2 * eps / (0.9**3 * d**2), rtol=1e-6)
-    rng = np.random.default_rng(seed)
-    v = rng.standard_normal(pos.shape)
-    h = 1e-10
+    _distance_rows_by_differences(pos, index, value, seed, 1e-10, -1.0)
     for row, val in zip(index, value, strict=True):
-        k, j = row[0] // 2, row[2] // 2
-
-        def dist(x, k=k, j=j):
-            return point_segment_distance(x[k], x[j], x[j + 1])
-
-        fd = (dist(pos + h * v) - dist(pos - h * v)) / (2 * h)
-        assert -val @ v.ravel()[row] == pytest.approx(fd, rel=1e-5, abs=1e-9)
         # the linearised distance after the step is beyond d exactly when (-a)ᵀs < D - d
         assert val @ step.ravel()[row] < offset[0]
     # -stiffness is ε/d² times the barrier's second derivative at u (differences of b)

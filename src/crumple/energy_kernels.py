@@ -506,6 +506,35 @@ def _same_pairs(ks, js, ks0, js0):
 
 
 @njit(cache=True)
+def _step_reach(step, k, j):
+    """|step_k| and max(|step_j|, |step_j+1|): together, the most a step can change the
+    distance of node k to segment j."""
+    sk = math.sqrt(step[k, 0] ** 2 + step[k, 1] ** 2)
+    sa = math.sqrt(step[j, 0] ** 2 + step[j, 1] ** 2)
+    sb = math.sqrt(step[j + 1, 0] ** 2 + step[j + 1, 1] ** 2)
+    return sk, max(sa, sb)
+
+
+@njit(cache=True)
+def _linearised(dist, t, nx, ny, step, k, j):
+    """The pair's distance after ``step``, linearised: D + ∇Dᵀ step."""
+    lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
+    lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
+    return lin
+
+
+@njit(cache=True)
+def _put_row(index, value, c, k, j, t, nx, ny, sign):
+    """Row c: the coordinates of node k and segment j's ends, and sign × ∇D over them."""
+    index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
+    index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
+    index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
+    value[c, 0], value[c, 1] = sign * nx, sign * ny
+    value[c, 2], value[c, 3] = sign * (-(1.0 - t) * nx), sign * (-(1.0 - t) * ny)
+    value[c, 4], value[c, 5] = sign * (-t * nx), sign * (-t * ny)
+
+
+@njit(cache=True)
 def _barrier_rows(pos, step, ks, js, width, margin=-1.0):
     """Candidate pairs outside the core (D >= d) that ``step`` could bring inside it.
 
@@ -527,23 +556,16 @@ def _barrier_rows(pos, step, ks, js, width, margin=-1.0):
         )
         if dist < width:
             continue
-        sk = math.sqrt(step[k, 0] ** 2 + step[k, 1] ** 2)
-        sa = math.sqrt(step[j, 0] ** 2 + step[j, 1] ** 2)
-        sb = math.sqrt(step[j + 1, 0] ** 2 + step[j + 1, 1] ** 2)
-        if dist - sk - max(sa, sb) >= width:
+        sk, sj = _step_reach(step, k, j)
+        if dist - sk - sj >= width:
             continue
         nx, ny = vx / dist, vy / dist
-        if margin >= 0.0:  # keep only pairs the step itself drives most of the way in
-            lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
-            lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
-            if lin >= width + margin * (dist - width):
-                continue
-        index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
-        index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
-        index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
-        value[c, 0], value[c, 1] = nx, ny
-        value[c, 2], value[c, 3] = -(1.0 - t) * nx, -(1.0 - t) * ny
-        value[c, 4], value[c, 5] = -t * nx, -t * ny
+        # keep only pairs the step itself drives most of the way in
+        if margin >= 0.0 and _linearised(dist, t, nx, ny, step, k, j) >= width + margin * (
+            dist - width
+        ):
+            continue
+        _put_row(index, value, c, k, j, t, nx, ny, 1.0)
         offset[c] = width - dist
         c += 1
     return index[:c], value[:c], offset[:c]
@@ -570,22 +592,13 @@ def _release_rows(pos, step, ks, js, width, margin):
         )
         if dist >= width or dist <= 0.0:
             continue
-        sk = math.sqrt(step[k, 0] ** 2 + step[k, 1] ** 2)
-        sa = math.sqrt(step[j, 0] ** 2 + step[j, 1] ** 2)
-        sb = math.sqrt(step[j + 1, 0] ** 2 + step[j + 1, 1] ** 2)
-        if dist + sk + max(sa, sb) < width:
+        sk, sj = _step_reach(step, k, j)
+        if dist + sk + sj < width:
             continue
         nx, ny = vx / dist, vy / dist
-        lin = dist + nx * (step[k, 0] - (1.0 - t) * step[j, 0] - t * step[j + 1, 0])
-        lin += ny * (step[k, 1] - (1.0 - t) * step[j, 1] - t * step[j + 1, 1])
-        if lin <= width - margin * (width - dist):
+        if _linearised(dist, t, nx, ny, step, k, j) <= width - margin * (width - dist):
             continue
-        index[c, 0], index[c, 1] = 2 * k, 2 * k + 1
-        index[c, 2], index[c, 3] = 2 * j, 2 * j + 1
-        index[c, 4], index[c, 5] = 2 * j + 2, 2 * j + 3
-        value[c, 0], value[c, 1] = -nx, -ny
-        value[c, 2], value[c, 3] = (1.0 - t) * nx, (1.0 - t) * ny
-        value[c, 4], value[c, 5] = t * nx, t * ny
+        _put_row(index, value, c, k, j, t, nx, ny, -1.0)
         offset[c] = dist - width
         u[c] = dist / width
         c += 1
