@@ -2,7 +2,7 @@
 
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
     python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
-    python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off]  # the scaling table
+    python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off] [save=DIR]  # table
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
@@ -163,9 +163,25 @@ def bench_decrease(ns=(10_000,), trap=0.0):
                       flush=True)  # fmt: skip
 
 
-def bench_scale(ns, seed=0, curved=None):
+def _saving(line, n, save):
+    """``line`` that also writes each stage's positions to ``save``/N<n>_stage<k>.npy (a
+    long ramp's checkpoints: a later stage can be re-minimised from them)."""
+    if save is None:
+        return line
+    os.makedirs(save, exist_ok=True)
+
+    def both(i, total, st):
+        np.save(os.path.join(save, f"N{n}_stage{i + 1:02d}.npy"), st.positions)
+        if line is not None:
+            line(i, total, st)
+
+    return both
+
+
+def bench_scale(ns, seed=0, curved=None, save=None):
     """The scaling table's rows: the default schedule at each N of ``ns`` (``curved``: the
-    ramp's ``curved_steps``, None: the default)."""
+    ramp's ``curved_steps``, None: the default; ``save``: a folder for each stage's
+    positions, None: none)."""
     ramp = Ramp(curved_steps=curved)
     print(f"== default schedule (44 stages), continuum B = 0.05, S = 5000, seed {seed}, curved "
           f"steps {'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
@@ -175,7 +191,7 @@ def bench_scale(ns, seed=0, curved=None):
     )
     for n in ns:
         wire = continuum_wire(n)
-        progress = _stage_line(n) if n >= 10_000 else None
+        progress = _saving(_stage_line(n) if n >= 10_000 else None, n, save)
         r, t = cpu(lambda wire=wire, p=progress: run_ramp(wire, ramp, seed=seed, progress=p))
         smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
         contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
@@ -572,7 +588,7 @@ if __name__ == "__main__":
     elif what == "scale":  # scale [N …] [seed=S] [curved=on|off]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
-        bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags))
+        bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags), flags.get("save"))
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
