@@ -220,6 +220,86 @@ def test_spring_solve_out_of_rounds_still_stops_at_the_first_contact():
     assert ok and s == pytest.approx([0.25, 0.5], rel=1e-8)
 
 
+def _releasing_problem(rng, n, m, fraction):
+    """A positive definite A, m springs beyond s = 0 (as above), about half of them of negative
+    stiffness (releasing a curvature of A, ``WireEnergy.barriers(releasing=True)``), scaled so
+    that A + Σ_(k<0) k_i a_i a_iᵀ keeps ``fraction`` of A's least eigenvalue: the piecewise
+    model is then strictly convex whatever the active set."""
+    q = rng.standard_normal((n, n))
+    a = q @ q.T + 0.5 * np.eye(n)
+    g = rng.standard_normal(n)
+    w = min(3, n)
+    index = np.array([rng.choice(n, w, replace=False) for _ in range(m)])
+    value = rng.standard_normal((m, w))
+    offset = -rng.uniform(0.0, 0.5, m)
+    rows = np.zeros((m, n))
+    for i in range(m):
+        rows[i, index[i]] = value[i]
+    negative = rng.random(m) < 0.5
+    lowest = np.linalg.eigvalsh(a)[0]
+    stiff = 10.0 ** rng.uniform(0.0, 4.0, m)
+    size = np.sum(rows**2, axis=1)
+    stiff[negative] = -(1.0 - fraction) * lowest / (size[negative] * max(negative.sum(), 1))
+    return a, g, index, value, offset, stiff, rows
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 10), m=st.integers(1, 6))
+def test_spring_solve_with_releasing_springs_is_the_minimiser_where_the_model_is_convex(seed, n, m):
+    """Negative springs that leave the model strictly convex: the solve's step, where it
+    finds the active set, is the enumerated minimiser, and it is a descent direction."""
+    rng = np.random.default_rng(seed)
+    a, g, index, value, offset, stiff, rows = _releasing_problem(rng, n, m, 0.2)
+    neg = stiff < 0
+    assert np.linalg.eigvalsh(a + (rows[neg].T * stiff[neg]) @ rows[neg])[0] > 0
+    f = LDLT().factorize(sp.csc_matrix(a))
+    p0 = f.solve(-g)
+    s, ok = f.solve_springs(p0, index, value, offset, stiff)
+    assert np.all(np.isfinite(s))
+    if ok:
+        want = _spring_kkt_minimiser(a, g, rows, offset, stiff)
+        np.testing.assert_allclose(s, want, rtol=1e-6, atol=1e-8 * (1 + np.abs(want).max()))
+        assert g @ s < 0
+
+
+@pytest.mark.parametrize("k", [-2.0, -3.0, -1e3])
+def test_spring_solve_refuses_an_active_set_without_a_minimiser(k):
+    """A = 2 I, p0 = (1/2, 1/2), one releasing spring that the step enters beyond x_0 = 1/4:
+    with k = -2 the model is linear there (singular system), with k < -2 unbounded below.
+    The solve neither raises nor returns the system's stationary point: it keeps the last
+    active set that has a minimiser (none active: p0) and says it did not converge."""
+    f = LDLT().factorize(sp.csc_matrix(np.diag([2.0, 2.0])))
+    s, ok = f.solve_springs(np.array([0.5, 0.5]), np.array([[0]]), np.array([[-1.0]]),
+                            np.array([-0.25]), np.array([k]))  # fmt: skip
+    assert not ok
+    assert s.tolist() == [0.5, 0.5]
+
+
+def test_spring_solve_takes_a_releasing_spring_that_keeps_the_model_convex():
+    """The same with k = -1: beyond x_0 = 1/4 the model is -s + s² - (s - 1/4)²/2, whose
+    minimiser is s = 3/4 (the curvature 2 - 1 = 1 left): by hand."""
+    f = LDLT().factorize(sp.csc_matrix(np.diag([2.0, 2.0])))
+    s, ok = f.solve_springs(np.array([0.5, 0.5]), np.array([[0]]), np.array([[-1.0]]),
+                            np.array([-0.25]), np.array([-1.0]))  # fmt: skip
+    assert ok
+    assert s == pytest.approx([0.75, 0.5], rel=1e-14)
+
+
+def test_refactorised_spring_step_stops_where_the_springs_make_the_model_indefinite():
+    """spring_step from a start where a releasing spring of k = -3 is active on A = 2 I: the
+    factor of A + k a aᵀ has a negative pivot, and the step stops there, not converged,
+    returning its start instead of a saddle of the model."""
+    eye = sp.csc_matrix(2.0 * np.eye(2))
+    csc = CSC(eye.data.copy(), eye.indices, eye.indptr)
+    ldl = LDLT()
+    ldl.factorize(csc)
+    start = np.array([0.5, 0.5])
+    s, ok, used = spring_step(ldl, csc, None, -np.ones(2), np.array([[0]]), np.array([[-1.0]]),
+                              np.array([-0.25]), np.array([-3.0]), start)  # fmt: skip
+    assert not ok and used == 1
+    assert s.tolist() == start.tolist()
+
+
 def _spring_problem(rng, n, m, logk, shift=False):
     """A random positive definite model in raw CSC (every entry stored: springs fit its pattern),
     m springs of 3 entries that all start beyond s = 0, and the dense rows of the springs."""

@@ -86,10 +86,13 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
         if not _spring_round(base, g, slot, sel, mu, offset, active, now, window, max_new):
             converged = True
             break
-        sel = np.flatnonzero(active)
-        cols, g, used = _spring_columns(n, lp, li, lx, d, perm, index, value, sel, slot, cols, g,
-                                        used)  # fmt: skip
-        mu = _spring_system(sel, slot, g, offset, base, stiff)
+        trial = np.flatnonzero(active)
+        cols, g, used = _spring_columns(n, lp, li, lx, d, perm, index, value, trial, slot, cols,
+                                        g, used)  # fmt: skip
+        step, convex = _spring_system(trial, slot, g, offset, base, stiff)
+        if not convex:  # no minimiser on this active set: the last one's step, not converged
+            break
+        sel, mu = trial, step
     s = p0.copy()
     for r in range(sel.shape[0]):
         col = cols[slot[sel[r]]]
@@ -169,13 +172,38 @@ def _spring_columns(n, lp, li, lx, d, perm, index, value, sel, slot, cols, g, us
 
 @njit(cache=True)
 def _spring_system(sel, slot, g, offset, base, stiff):
-    """μ of (K⁻¹ + UᵀA⁻¹U) μ = r_S - Uᵀp0 over the springs of S (``sel``), UᵀA⁻¹U symmetrised."""
+    """μ of (K⁻¹ + UᵀA⁻¹U) μ = r_S - Uᵀp0 over the springs of S (``sel``), UᵀA⁻¹U symmetrised,
+    and whether the model with S active is strictly convex (A + U K Uᵀ positive definite).
+
+    With every k_i > 0 it is (A is). A spring of negative stiffness (one that releases a
+    curvature of A, :meth:`crumple.energy.WireEnergy.barriers` with ``releasing``) can make it
+    indefinite or singular, and then the system has no minimiser to give. By Haynsworth's
+    inertia additivity on [[A, U], [Uᵀ, -K⁻¹]], the negative eigenvalues of A + U K Uᵀ number
+    pos(K⁻¹ + UᵀA⁻¹U) - #{i in S: k_i > 0}; the test is that count, from the eigenvalues of the
+    small symmetric matrix (none within ``SPRING_SINGULAR`` of zero, relative to the largest)."""
     k = sel.shape[0]
     mat = np.empty((k, k))
     rhs = np.empty(k)
+    positive = 0
     for r in range(k):
         rhs[r] = offset[sel[r]] - base[sel[r]]
         for q in range(k):
             mat[r, q] = 0.5 * (g[sel[r], slot[sel[q]]] + g[sel[q], slot[sel[r]]])
         mat[r, r] += 1.0 / stiff[sel[r]]
-    return np.linalg.solve(mat, rhs) if k > 0 else rhs
+        positive += stiff[sel[r]] > 0.0
+    if k == 0:
+        return rhs, True
+    if positive == k:
+        return np.linalg.solve(mat, rhs), True
+    w, v = np.linalg.eigh(mat)
+    top = np.abs(w).max()
+    if not (np.isfinite(top) and top > 0.0):
+        return rhs, False
+    if (np.abs(w) <= SPRING_SINGULAR * top).any() or (w > 0.0).sum() != positive:
+        return rhs, False
+    return v @ ((v.T @ rhs) / w), True
+
+
+#: Where :func:`_spring_system` calls the model with negative springs singular: an eigenvalue of
+#: K⁻¹ + UᵀA⁻¹U within this fraction of the largest (their round-off is ~10⁻¹⁶ of it).
+SPRING_SINGULAR = 1e-12

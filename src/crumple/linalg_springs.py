@@ -16,6 +16,9 @@ to the minimiser of that quadratic, or to the minimiser of q on the way there (a
 search: q is convex along any line, its derivative piecewise linear and nondecreasing). q falls
 at every round, and a round whose solution has the active set it was computed with has found
 the exact minimiser. The cost of a round does not depend on how many springs are active.
+All of this is for springs of positive stiffness. A spring of negative stiffness (a releasing
+row, :meth:`crumple.energy.WireEnergy.barriers`) can make q non-convex: a round whose
+A + Σ_S k_i a_i a_iᵀ has a negative pivot then stops, not converged, at its start.
 """
 
 from __future__ import annotations
@@ -126,7 +129,7 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
         if not ok:
             return None, False, used
         f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
-        if f.negative:  # A + springs is positive definite when A is: round-off only
+        if f.negative:  # not with positive springs (A is); releasing ones can: no minimiser
             return s, False, used
         trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
         if np.array_equal(_rows_dot(index, value, trial) < offset, active):
