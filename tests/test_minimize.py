@@ -1213,6 +1213,30 @@ def test_a_refused_point_hands_its_own_step_to_the_next_iteration(monkeypatch):
     assert not old.converged and old.energy > 1e-2, old.message
 
 
+def test_a_refused_point_s_step_gives_way_to_the_accurate_step_where_no_spring_is_listed(
+    monkeypatch,
+):
+    """The same chain with the accurate steps on: the points the decrease test refuses still
+    hand on their steps, but where no spring is listed the step is the accurate product's
+    truncated CG (solved to its own test), not the handed-on one: the run is the same, bit
+    for bit, as with ``REFUSED_STEPS`` off. (Measured at N = 10⁵: 20 iterations against 8 on
+    the first smooth stage after buckling when the handed-on step was taken.)"""
+    import crumple.minimize as mn
+    import crumple.minimize_accurate as ma
+
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    handed = []
+    takes = mn._takes
+    monkeypatch.setattr(mn, "_takes", lambda st, step: handed.append(1) or takes(st, step))
+    r = newton(fun, x0, maxiter=50, accurate_steps=True, **kw)
+    assert r.converged, r.message
+    assert handed, "no refused point handed on a step: the test does not reach the rule"
+    monkeypatch.setattr(ma, "REFUSED_STEPS", False)
+    off = newton(fun, x0, maxiter=50, accurate_steps=True, **kw)
+    assert (off.iterations, off.krylov_iterations) == (r.iterations, r.krylov_iterations)
+    assert np.array_equal(off.x, r.x)
+
+
 def test_the_accurate_step_is_the_newton_step_of_the_accurate_hessian():
     """Inside the trust radius and where the accurate H is positive definite, the step is
     -H⁻¹g of the accurate product, not the wrong factor's (here 160 times apart along the soft

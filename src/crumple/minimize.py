@@ -39,7 +39,7 @@ from .minimize_accurate import (
     _recheck,
 )
 from .minimize_barriers import _barrier_step, _merged_rows
-from .minimize_krylov import _accurate_spring_step, _accurate_step
+from .minimize_krylov import _accurate_spring_step, _accurate_step, _applies
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
@@ -344,11 +344,12 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
     entries) and its line search; ``st`` updated; None, or why the iteration failed."""
     st.it += 1
     p = _direction(st, hess, hess_fallback, ldl, floor, m)
-    pending, st.pending = st.pending, None
-    taken = pending is not None and _takes(st, pending)
-    if taken:  # the refused point's own step (minimize_accurate.REFUSED_STEPS)
+    pending, q = _pending_step(st, barriers, ldl, m, floor)
+    taken = pending is not None
+    if taken:  # the refused point's own step, q its springs' step
         p = pending
-    q = p if barriers is None else _barrier_step(st, p, barriers, ldl)
+    else:
+        q = p if barriers is None else _barrier_step(st, p, barriers, ldl)
     if q is p and not taken:  # no spring: the accurate product's step where the assembled H
         s = _accurate_step(st, p, m, floor)  # cannot resolve (p itself where it does not apply)
         # a longer step may reach pairs p did not: then p, whose barriers were listed
@@ -364,6 +365,24 @@ def _newton_step(st, fun, hess, hess_fallback, ldl, floor, m, barriers, step_lim
         return "could not make the Hessian positive definite (non-finite factor)"
     return _line_search(st, fun, p, step_limit, feasible, armijo, max_backtracks, max_step,
                         retract)  # fmt: skip
+
+
+def _pending_step(st, barriers, ldl, m, floor):
+    """The step a refused point handed on (``minimize_accurate.REFUSED_STEPS``) and its
+    springs' step (itself where none is listed), or (None, None) where it is not taken.
+
+    Taken where :func:`_takes` accepts it, unless no spring is listed for it and the accurate
+    product makes the step (:func:`crumple.minimize_krylov._applies`): that step solves the
+    same system by truncated CG to its own test, where the refused point's solve stopped as
+    soon as the decrease bound was passed (measured: the first smooth stage after buckling at
+    N = 10⁵, 20 iterations with the handed-on step, 8 without; docs/performance.md)."""
+    pending, st.pending = st.pending, None
+    if pending is None or not _takes(st, pending):
+        return None, None
+    q = pending if barriers is None else _barrier_step(st, pending, barriers, ldl)
+    if st.springs is None and _applies(st, m, floor):
+        return None, None
+    return pending, q
 
 
 def _takes(st, step) -> bool:
