@@ -345,9 +345,11 @@ class WireEnergy:
         energy has none (the barrier's second derivative jumps from 2ε/d² to 0 at D = d).
         The model is then not convex in general: removing that curvature can leave H + Σ k_i
         a_i a_iᵀ indefinite where the contacts are what made H positive definite (a review
-        found one on a compressed hairpin). The springs' solvers may then stop short or at a
-        saddle of the model; every step is still checked to be a descent direction, and the
-        line search to lower the energy, so only the step's quality is at stake.
+        found one on a compressed hairpin). The springs' solvers refuse an active set whose
+        model has no minimiser (the solve by the inertia of its small Woodbury system, the
+        refactorised and the accurate spring steps by a negative pivot) and keep the last one
+        that has; every step is still checked to be a descent direction, and the line search
+        to lower the energy, so only the step's quality is at stake.
         """
         w = self.wire
         x = np.ascontiguousarray(x, dtype=np.float64)
