@@ -35,10 +35,10 @@ from .linalg import CSC, LDLT
 from .minimize_accurate import (
     _accurate_check,
     _accurate_resolved,
-    _constrained_action,
     _recheck,
 )
 from .minimize_barriers import _barrier_step, _merged_rows
+from .minimize_fixed import _constrained, _constrained_action, _fixed_mask
 from .minimize_krylov import _accurate_spring_step, _accurate_step, _applies
 from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
@@ -424,63 +424,6 @@ def _along(st) -> str:
         return ""
     return (f", {st.accurate_escapes} along the accurate Hessian product's mode where the "
             "assembled one's gave no step down")  # fmt: skip
-
-
-def _fixed_mask(fixed, x):
-    """The fixed rows as a boolean mask over ``x.ravel()``, or None when nothing is fixed."""
-    if fixed is None:
-        return None
-    f = np.asarray(fixed)
-    if f.dtype != np.bool_ or f.shape != x.shape[:1]:
-        raise ValueError(f"fixed must be a boolean array of shape {x.shape[:1]}, got {f.dtype} "
-                         f"{f.shape}")  # fmt: skip
-    if not f.any():
-        return None
-    if f.all():
-        raise ValueError("every row is fixed: nothing to minimise")
-    return np.repeat(f, x.shape[1]) if x.ndim == 2 else f.copy()
-
-
-def _constrained(mask, fun, hess, hess_fallback):
-    """``fun`` and the Hessians with the fixed entries removed: zero gradient there, and the
-    identity in their rows and columns of the Hessian (same sparsity pattern where the
-    diagonal is stored, so a symbolic analysis is still reused)."""
-
-    def cfun(x):
-        e, g = fun(x)
-        g = np.array(g, dtype=np.float64)
-        g.reshape(-1)[mask] = 0.0
-        return e, g
-
-    def chess(h):
-        if isinstance(h, CSC):
-            h = h.tocsc()
-        if sp.issparse(h):
-            h = h.tocsc()
-            col = np.repeat(np.arange(h.shape[1]), np.diff(h.indptr))
-            row = h.indices
-            if np.count_nonzero(mask[row] & (row == col)) == np.count_nonzero(mask):
-                # same index arrays (not copies): the factorisation sees the same pattern
-                data = h.data.copy()
-                touched = mask[row] | mask[col]
-                data[touched] = np.where(row[touched] == col[touched], 1.0, 0.0)
-                return sp.csc_matrix((data, h.indices, h.indptr), shape=h.shape, copy=False)
-            keep = sp.diags((~mask).astype(np.float64))
-            return (keep @ h @ keep + sp.diags(mask.astype(np.float64))).tocsc()
-        h = np.array(h, dtype=np.float64)
-        h[mask, :] = 0.0
-        h[:, mask] = 0.0
-        h[mask, mask] = 1.0
-        return h
-
-    def chessian(x):
-        return chess(hess(x))
-
-    if hess_fallback is None or hess_fallback is hess:  # the exact one: still the same object
-        fallback = None if hess_fallback is None else chessian
-    else:
-        fallback = lambda x: chess(hess_fallback(x))  # noqa: E731
-    return cfun, chessian, fallback
 
 
 @dataclass(slots=True)

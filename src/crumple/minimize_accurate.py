@@ -340,19 +340,3 @@ def _cg_quadratic(action, b, precondition, project, above=np.inf):
         p = z + (rz_new / rz) * p
         rz = rz_new
     return est, s, f"a lower bound, not settled in {ACCURATE_MAXITER} conjugate-gradient iterations"
-
-
-def _constrained_action(mask, hess_action):
-    """``hess_action`` of the constrained Hessian (``minimize._constrained``): v's fixed
-    entries removed, and the identity's on them."""
-    if hess_action is None:
-        return None
-
-    def action(x, v):
-        w = np.array(v, dtype=np.float64).ravel()
-        w[mask] = 0.0
-        out = np.array(hess_action(x, w), dtype=np.float64).ravel()
-        out[mask] = np.asarray(v, dtype=np.float64).ravel()[mask]
-        return out
-
-    return action
