@@ -221,24 +221,15 @@ def test_spring_solve_out_of_rounds_still_stops_at_the_first_contact():
 
 
 def _releasing_problem(rng, n, m, fraction):
-    """A positive definite A, m springs beyond s = 0 (as above), about half of them of negative
+    """A problem of :func:`_spring_problem` with about half of its springs of negative
     stiffness (releasing a curvature of A, ``WireEnergy.barriers(releasing=True)``), scaled so
     that A + Σ_(k<0) k_i a_i a_iᵀ keeps ``fraction`` of A's least eigenvalue: the piecewise
     model is then strictly convex whatever the active set."""
-    q = rng.standard_normal((n, n))
-    a = q @ q.T + 0.5 * np.eye(n)
-    g = rng.standard_normal(n)
-    w = min(3, n)
-    index = np.array([rng.choice(n, w, replace=False) for _ in range(m)])
-    value = rng.standard_normal((m, w))
-    offset = -rng.uniform(0.0, 0.5, m)
-    rows = np.zeros((m, n))
-    for i in range(m):
-        rows[i, index[i]] = value[i]
+    _, _, a, g, index, value, offset, _, rows = _spring_problem(rng, n, m, 0.0)
     negative = rng.random(m) < 0.5
-    lowest = np.linalg.eigvalsh(a)[0]
     stiff = 10.0 ** rng.uniform(0.0, 4.0, m)
     size = np.sum(rows**2, axis=1)
+    lowest = np.linalg.eigvalsh(a)[0]
     stiff[negative] = -(1.0 - fraction) * lowest / (size[negative] * max(negative.sum(), 1))
     return a, g, index, value, offset, stiff, rows
 
