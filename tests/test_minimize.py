@@ -830,6 +830,49 @@ def test_the_accurate_escape_steps_down_where_the_assembled_mode_cannot(monkeypa
     assert rescued.evaluations > first.evaluations  # the failed trials along B's mode
 
 
+def test_after_a_rescue_the_escapes_take_the_accurate_mode_first(monkeypatch):
+    """Three stiff chains: A1 and A2 truly unstable (soft -0.2 and -0.1), B stable (0.1), the
+    'assembled' H wrong by ±0.5 along each uniform mode, so that its lowest mode is always
+    B's, which goes up. The first escape is a rescue (the assembled mode fails, then A1's
+    accurate mode); at A1's minimum A2 is still unstable, and the second escape takes A2's
+    accurate mode at once, without the eigensolve of the assembled H and its failed trials
+    (at N = 10⁵ that eigensolve was half of a contact stage's CPU). Both end at the minimum."""
+    import crumple.minimize_modes as mm
+
+    chains = [stiff_chain(soft=v) for v in (-0.2, -0.1, 0.1)]
+    n = N_CHAIN
+    parts = [slice(0, n), slice(n, 2 * n), slice(2 * n, 3 * n)]
+
+    def fun(x):
+        out = [f(x[p]) for (f, _, _), p in zip(chains, parts, strict=True)]
+        return sum(e for e, _ in out), np.concatenate([g for _, g in out])
+
+    def hess(x):
+        shifts = (0.5, 0.5, -0.5)
+        return sp.block_diag(
+            [
+                exact(x[p]) + uniform_mode(v)
+                for (_, exact, _), p, v in zip(chains, parts, shifts, strict=True)
+            ]
+        ).tocsc()
+
+    def action(x, v):
+        return np.concatenate(
+            [act(x[p], v[p]) for (_, _, act), p in zip(chains, parts, strict=True)]
+        )
+
+    calls = []
+    lowest = mm._lowest_mode
+    monkeypatch.setattr(mm, "_lowest_mode", lambda *a, **k: calls.append(1) or lowest(*a, **k))
+    r = chain_newton(fun, hess, hess_action=action, size=3 * n)
+    assert r.converged, r.message
+    assert "2 saddle escapes, 2 along the accurate Hessian product's mode" in r.message
+    np.testing.assert_allclose(np.abs(r.x[parts[0]]), math.sqrt(0.2), rtol=1e-4)
+    np.testing.assert_allclose(np.abs(r.x[parts[1]]), math.sqrt(0.1), rtol=1e-4)
+    np.testing.assert_allclose(r.x[parts[2]], 0.0, atol=1e-6)
+    assert len(calls) == 1  # the assembled H's eigensolve for the first escape only
+
+
 def test_an_escape_along_the_assembled_mode_is_unchanged_where_the_accurate_mode_is_known(
     monkeypatch,
 ):

@@ -292,9 +292,14 @@ def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_
     if st.escapes >= max_escapes:
         st.unstable = True
         return f"stopped at an unstable equilibrium after {st.escapes} escapes{_along(st)}"
-    first = mode if minimize_accurate.ACCURATE_ESCAPE else None  # None: the assembled H's mode
+    # the accurate mode first where asked, or once the assembled one has failed in this run
+    first = mode if minimize_accurate.ACCURATE_ESCAPE or st.accurate_escapes else None
     escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, first)
-    if not escaped and first is None and mode is not None:
+    if first is not None and not minimize_accurate.ACCURATE_ESCAPE:
+        st.accurate_escapes += escaped
+        if not escaped:  # the assembled H's mode after all
+            escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible)
+    elif not escaped and first is None and mode is not None:
         # the rescue: the assembled mode gives no step down (round-off at large N)
         escaped = _escape(st, fun, h, m, ldl, check, floor, modes, step_limit, feasible, mode)
         st.accurate_escapes += escaped
@@ -419,11 +424,12 @@ def _result(st, ldl, ftol, message) -> MinimizeResult:
 
 
 def _along(st) -> str:
-    """The escape message's note of the escapes the accurate mode took (the rescue), or ""."""
+    """The escape message's note of the escapes the accurate mode took (the rescue, and every
+    escape after it in the run), or ""."""
     if not st.accurate_escapes:
         return ""
-    return (f", {st.accurate_escapes} along the accurate Hessian product's mode where the "
-            "assembled one's gave no step down")  # fmt: skip
+    return (f", {st.accurate_escapes} along the accurate Hessian product's mode, the assembled "
+            "one's having given no step down")  # fmt: skip
 
 
 @dataclass(slots=True)
@@ -449,7 +455,7 @@ class _State:
     hess_action: Callable | None = None  # the accurate H v, or None
     exact: bool = True  # the last direction is the exact Hessian's Newton step
     escapes: int = 0  # saddle escapes taken
-    accurate_escapes: int = 0  # of them, along the accurate mode after the assembled one's failed
+    accurate_escapes: int = 0  # of them, along the accurate mode (the assembled one's failed)
     refusals: int = 0  # points the accurate product found stable that the decrease test refused
     unstable: bool = False  # stopped at an equilibrium that is not a minimum
     refine: bool = False  # forces below their resolution but a Newton step still pays: go on
