@@ -41,6 +41,7 @@ import numpy as np
 
 from .energy_action import _hessian_action
 from .energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
+from .energy_barrier_kernels import _barrier_rows, _release_rows
 from .energy_functions import (
     _plastic_args,
     _rest_angles,
@@ -52,12 +53,10 @@ from .energy_functions import (
     stretching_energy,
 )
 from .energy_kernels import (
-    _barrier_rows,
     _hessian_triplets,
     _hessian_values,
     _in_core,
     _max_displacement,
-    _release_rows,
     _same_pairs,
     _total_eg,
 )
