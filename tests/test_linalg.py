@@ -192,6 +192,80 @@ def test_spring_solve_is_the_minimiser_of_the_piecewise_model(seed, n, m, logk):
         assert g @ s < 0 or np.allclose(g, 0)
 
 
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
+       logk=st.floats(0.0, 7.0), guess=st.integers(0, 2**6 - 1))  # fmt: skip
+def test_a_warm_started_spring_solve_finds_the_same_minimiser(seed, n, m, logk, guess):
+    """Any first active set (``start``, here an arbitrary mask) leads to the minimiser of the
+    cold start where both converge, and ``return_active`` is the set {i: a_iᵀs < r_i} at s."""
+    _, _, a, g, index, value, offset, stiff, rows = _spring_problem(
+        np.random.default_rng(seed), n, m, logk
+    )
+    f = LDLT().factorize(sp.csc_matrix(a))
+    p0 = f.solve(-g)
+    cold, ok_cold = f.solve_springs(p0, index, value, offset, stiff)
+    start = np.array([(guess >> i) & 1 == 1 for i in range(m)])
+    warm, ok, active = f.solve_springs(p0, index, value, offset, stiff, start=start,
+                                       return_active=True)  # fmt: skip
+    if ok:
+        want = _spring_kkt_minimiser(a, g, rows, offset, stiff)
+        np.testing.assert_allclose(warm, want, rtol=1e-6, atol=1e-8 * (1 + np.abs(want).max()))
+        np.testing.assert_array_equal(active, rows @ warm < offset)
+        if ok_cold:
+            np.testing.assert_allclose(warm, cold, rtol=1e-9, atol=1e-12 * np.abs(cold).max())
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 12), m=st.integers(1, 6),
+       extra=st.integers(0, 4), logk=st.floats(0.0, 7.0))  # fmt: skip
+def test_a_second_springs_solve_on_a_factor_reuses_its_columns_bit_for_bit(seed, n, m, extra,
+                                                                         logk):  # fmt: skip
+    """A relisting solves again with the same factor, the springs of the first call and more:
+    the columns A⁻¹a_i kept from the first call give the same step, bit for bit, as a fresh
+    factor that has none; a spring whose row of values changed is solved again, not reused."""
+    rng = np.random.default_rng(seed)
+    _, _, a, g, index, value, offset, stiff, _ = _spring_problem(rng, n, m + extra, logk)
+    f = LDLT().factorize(sp.csc_matrix(a))
+    p0 = f.solve(-g)
+    f.solve_springs(p0, index[:m], value[:m], offset[:m], stiff[:m])  # the first listing
+    again = f.solve_springs(p0, index, value, offset, stiff)
+    fresh = LDLT().factorize(sp.csc_matrix(a)).solve_springs(p0, index, value, offset, stiff)
+    assert again[1] == fresh[1] and np.array_equal(again[0], fresh[0])
+    changed = value.copy()
+    changed[0] *= 1.5
+    again = f.solve_springs(p0, index, changed, offset, stiff)
+    fresh = LDLT().factorize(sp.csc_matrix(a)).solve_springs(p0, index, changed, offset, stiff)
+    assert again[1] == fresh[1] and np.array_equal(again[0], fresh[0])
+
+
+def test_a_warm_start_with_the_right_active_set_takes_one_round():
+    """Identity model, p0 = (1, 1), springs at x_0 = 0.25 and x_1 = 0.5: cold, one round
+    finds only the first spring; started from both, one round confirms the minimiser."""
+    f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
+    args = (np.array([[0], [1]]), np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.5]),
+            np.full(2, 1e9))  # fmt: skip
+    s, ok = f.solve_springs(np.ones(2), *args, rounds=1)
+    assert not ok
+    s, ok, active = f.solve_springs(np.ones(2), *args, rounds=1, start=np.ones(2, bool),
+                                    return_active=True)  # fmt: skip
+    assert ok and active.tolist() == [True, True]
+    assert s == pytest.approx([0.25, 0.5], rel=1e-8)
+    with pytest.raises(ValueError, match="start must be a boolean mask over the 2 springs"):
+        f.solve_springs(np.ones(2), *args, start=np.ones(3, bool))
+
+
+def test_a_warm_start_without_a_minimiser_is_dropped_for_the_cold_rounds():
+    """A = 2 I, one releasing spring of k = -3 (no minimiser with it active) and one stiff
+    positive spring: started with both active, the solve drops the start and finds, from no
+    spring, what the cold start finds."""
+    f = LDLT().factorize(sp.csc_matrix(np.diag([2.0, 2.0])))
+    args = (np.array([[0], [1]]), np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.25]),
+            np.array([-3.0, 1e9]))  # fmt: skip
+    cold, ok_cold = f.solve_springs(np.array([0.5, 0.5]), *args)
+    warm, ok = f.solve_springs(np.array([0.5, 0.5]), *args, start=np.ones(2, bool))
+    assert ok == ok_cold and warm.tolist() == cold.tolist()
+
+
 def test_spring_solve_stops_a_step_at_a_stiff_spring_and_ignores_far_ones():
     """Identity model, step p0 = (1, 1): a stiff spring at x_0 = 0.25 holds that entry there
     (less the spring's give, force / k); a spring the step does not reach stays inactive."""

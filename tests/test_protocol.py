@@ -757,6 +757,34 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     assert forced.stages[-1].energy.hard_core > 0  # the last stage is in contact
 
 
+def test_warm_started_springs_reach_the_same_contact_equilibria(monkeypatch):
+    """The opt-in warm start of the springs' solve (minimize_barriers.WARM_START) changes
+    which rounds find each step's active set, not the model's minimiser: the default wire's
+    contact stages still converge, stable and without crossing, at the default's energies."""
+    import crumple.minimize_barriers as minimize_module
+    from crumple.linalg import Factorization
+
+    wire = Wire(k_b=5, k_s=5e5, n_segments=60)
+    ramp = Ramp(lambdas=[1.0, 40.0, 200.0, 600.0])
+    normal = run_ramp(wire, ramp, seed=1)
+    starts = []
+    smw = Factorization.solve_springs
+
+    def seen(self, *args, **kwargs):
+        starts.append(kwargs.get("start") is not None)
+        return smw(self, *args, **kwargs)
+
+    monkeypatch.setattr(minimize_module, "WARM_START", True)
+    monkeypatch.setattr(Factorization, "solve_springs", seen)
+    warm = run_ramp(wire, ramp, seed=1)
+    assert sum(starts) > 10  # the warm start was used
+    for a, b in zip(normal.stages, warm.stages, strict=True):
+        assert b.result.converged, b.result.message
+        assert not has_crossings(b.positions)
+        assert b.energy.total == pytest.approx(a.energy.total, rel=1e-6)
+    assert warm.stages[-1].energy.hard_core > 0
+
+
 def test_accurate_stability_is_unused_where_the_assembled_hessian_resolves_tau(monkeypatch):
     """relax.ACCURATE_STABILITY (on by default) passes the element-form product to Newton; at
     N = 100 the assembled Hessian resolves τ, so the product is never called and the result is

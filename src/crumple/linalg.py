@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from .linalg_solve import _solve, _spring_solve, _unit_back_solve
+from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
 __all__ = ["CSC", "LDLT", "Factorization"]
 
@@ -219,6 +219,9 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp,
 
 
 _EMPTY = np.empty(0)
+_NO_START = np.zeros(0, dtype=np.bool_)
+_NO_SLOT = np.zeros(0, dtype=np.int64)
+_NO_COLUMNS = np.zeros((0, 0))
 
 
 # --------------------------------------------------------------------------------------------
@@ -447,10 +450,12 @@ class Factorization:
         only :meth:`negative_direction` may be used.
     """
 
-    __slots__ = ("_d", "_lx", "_sym", "complete", "first_modified", "modified", "negative")
+    __slots__ = ("_columns", "_d", "_lx", "_sym", "complete", "first_modified", "modified",
+                 "negative")  # fmt: skip
 
     def __init__(self, sym, lx, d, negative, modified):
         self._sym, self._lx, self._d = sym, lx, d
+        self._columns = None  # the last springs' solve: (index, value, slot, A⁻¹a columns)
         self.negative, self.modified = int(negative), int(modified)
         self.complete = True  # False: a trial stopped at its first modified pivot
 
@@ -471,7 +476,7 @@ class Factorization:
         return _solve(s.n, s.lp, s.ai_l, self._lx, self._d, s.perm, b)
 
     def solve_springs(self, p0, index, value, offset, stiffness, *, rounds=50, window=0.1,
-                      max_new=2):  # fmt: skip
+                      max_new=2, start=None, return_active=False):  # fmt: skip
         """The minimiser s of gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)², p0 = -A⁻¹g.
 
         A is the factored matrix (positive definite); the one-sided springs have rows a_i with
@@ -480,7 +485,13 @@ class Factorization:
         ``(s, converged)``: converged when the active set {i: a_iᵀs < r_i} was found within
         ``rounds`` rounds (springs are added in the order the step enters them, those within
         ``window`` of the first together, at most ``max_new`` per round; see
-        :func:`crumple.linalg_solve._spring_solve`).
+        :func:`crumple.linalg_solve._spring_solve`). ``start``, a boolean mask over the springs,
+        is a first guess of the active set (a warm start: with positive springs the minimiser
+        is unique, and the start changes only the rounds it takes). With ``return_active``,
+        returns ``(s, converged, active)``, ``active`` the mask of the springs active at s.
+        The columns A⁻¹a_i solved are kept with the factor: a later call with some of the same
+        springs (rows of ``index`` and ``value`` equal, as a relisting of a step's springs
+        gives) reuses them, bit for bit.
 
         >>> f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
         >>> s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0]]), np.array([[-1.0]]),
@@ -490,15 +501,32 @@ class Factorization:
         """
         self._check_complete()
         sym = self._sym
-        return _spring_solve(
+        m = np.shape(offset)[0]
+        first = _NO_START if start is None else np.asarray(start, dtype=np.bool_)
+        if first.shape[0] not in (0, m):
+            raise ValueError(f"start must be a boolean mask over the {m} springs")
+        index = np.ascontiguousarray(index, dtype=np.int64)
+        value = np.ascontiguousarray(value, dtype=np.float64)
+        known_slot, known_cols = self._known_columns(index, value)
+        s, converged, active, slot, cols = _spring_solve(
             sym.n, sym.lp, sym.ai_l, self._lx, self._d, sym.perm,
-            np.ascontiguousarray(p0, dtype=np.float64).ravel(),
-            np.ascontiguousarray(index, dtype=np.int64),
-            np.ascontiguousarray(value, dtype=np.float64),
+            np.ascontiguousarray(p0, dtype=np.float64).ravel(), index, value,
             np.ascontiguousarray(offset, dtype=np.float64),
             np.ascontiguousarray(stiffness, dtype=np.float64), int(rounds), float(window),
-            int(max_new),
+            int(max_new), np.ascontiguousarray(first), known_slot, known_cols,
         )  # fmt: skip
+        self._columns = (index.copy(), value.copy(), slot, cols) if cols.shape[0] else None
+        return (s, converged, active) if return_active else (s, converged)
+
+    def _known_columns(self, index, value):
+        """The columns A⁻¹a_i of the last springs' solve, and for each spring of ``index``,
+        ``value`` the one that is its (-1: none)."""
+        if self._columns is None or index.shape[1:] != self._columns[0].shape[1:]:
+            return _NO_SLOT, _NO_COLUMNS
+        old_index, old_value, old_slot, cols = self._columns
+        where = _row_positions(old_index, index, old_value, value)
+        slot = np.where(where >= 0, old_slot[where], -1)
+        return (slot, cols) if (slot >= 0).any() else (_NO_SLOT, _NO_COLUMNS)
 
     def negative_direction(self) -> np.ndarray | None:
         """A direction of low curvature: v = Pᵀ L⁻ᵀ e_k, for which vᵀ(A + diag(shift))v = d_k.

@@ -54,7 +54,7 @@ def _back_unpermute(n, lp, li, lx, perm, x, top):
 
 @njit(cache=True)
 def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, rounds, window,
-                  max_new):  # fmt: skip
+                  max_new, start, known_slot, known_cols):  # fmt: skip
     """Minimise gᵀs + ½ sᵀAs + Σ_i k_i/2 max(0, r_i - a_iᵀs)² given p0 = -A⁻¹g (A factored).
 
     An active-set iteration on S, the springs the step enters. For a given S, by
@@ -67,20 +67,42 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
     N = 1000 ramp against no limit (1 and 4 were slower than 2). Each A⁻¹a_i is one solve
     with the factor, computed once, and only the products a_jᵀA⁻¹a_i are kept: a round costs
     O(m |S| + |S|³). Converged when a round changes nothing: s is then the exact minimiser.
-    Returns (s, converged).
+
+    ``start`` (a boolean mask over the springs, or empty) is a first S: its step is solved
+    before the first round (a warm start, e.g. the springs a step entered at the point before;
+    where the model with it is not strictly convex, the rounds start from S empty instead).
+    With positive springs the minimiser is unique, so the start changes only the rounds it
+    takes. ``known_cols`` (k, n) are columns A⁻¹a already solved with this factor (an earlier
+    call's), ``known_slot[i]`` the one of spring i (-1: none; empty: no spring known): they are
+    not solved again, and the results are bit for bit those without them. Returns (s,
+    converged, the mask of S at s, slot, cols): every column solved or known, and where.
     """
     m = index.shape[0]
     active = np.zeros(m, dtype=np.bool_)
     slot = np.full(m, -1, dtype=np.int64)  # where A⁻¹a_i is in cols, g; -1: not computed
-    cols = np.empty((8, n))
-    g = np.empty((m, 8))  # g[j, slot[i]] = a_jᵀ A⁻¹ a_i
-    used = 0
+    used = known_cols.shape[0]
+    cols = np.empty((max(8, 2 * used), n))
+    g = np.empty((m, cols.shape[0]))  # g[j, slot[i]] = a_jᵀ A⁻¹ a_i
+    if known_slot.shape[0]:
+        slot[:] = known_slot
+    for u in range(used):
+        cols[u] = known_cols[u]
+        for j in range(m):
+            g[j, u] = _row_dot(index, value, j, cols[u])
     base = np.empty(m)  # a_jᵀ p0
     for j in range(m):
         base[j] = _row_dot(index, value, j, p0)
     sel = np.empty(0, dtype=np.int64)
     mu = np.empty(0)
     now = np.empty(m)  # a_jᵀ s
+    if start.shape[0] and start.any():
+        trial = np.flatnonzero(start)
+        cols, g, used = _spring_columns(n, lp, li, lx, d, perm, index, value, trial, slot, cols,
+                                        g, used)  # fmt: skip
+        step, convex = _spring_system(trial, slot, g, offset, base, stiff)
+        if convex:
+            sel, mu = trial, step
+            active[trial] = True
     converged = False
     for _ in range(rounds):
         if not _spring_round(base, g, slot, sel, mu, offset, active, now, window, max_new):
@@ -94,11 +116,13 @@ def _spring_solve(n, lp, li, lx, d, perm, p0, index, value, offset, stiff, round
             break
         sel, mu = trial, step
     s = p0.copy()
+    final = np.zeros(m, dtype=np.bool_)
     for r in range(sel.shape[0]):
+        final[sel[r]] = True
         col = cols[slot[sel[r]]]
         for e in range(n):
             s[e] += mu[r] * col[e]
-    return s, converged
+    return s, converged, final, slot, cols[:used]
 
 
 @njit(cache=True)
@@ -207,3 +231,45 @@ def _spring_system(sel, slot, g, offset, base, stiff):
 #: Where :func:`_spring_system` calls the model with negative springs singular: an eigenvalue of
 #: K⁻¹ + UᵀA⁻¹U within this fraction of the largest (their round-off is ~10⁻¹⁶ of it).
 SPRING_SINGULAR = 1e-12
+
+
+@njit(cache=True)
+def _row_hashes(index):
+    """An FNV-style hash of every row of an integer array (wrapping int64 arithmetic)."""
+    m, w = index.shape
+    out = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        h = np.int64(-3750763034362895579)
+        for c in range(w):
+            h = (h ^ np.int64(index[i, c])) * np.int64(1099511628211)
+        out[i] = h
+    return out
+
+
+@njit(cache=True)
+def _row_positions(old, new, old_value, new_value):
+    """For every row of ``new``, the row of ``old`` equal to it (both integer arrays of the
+    same width), or -1: exact, rows with equal hashes compared entry by entry. With values
+    (float arrays of the rows' shapes; empty: not compared) the rows of values must be equal
+    too."""
+    w = old.shape[1]
+    values = old_value.shape[0] > 0
+    hashes = _row_hashes(old)
+    order = np.argsort(hashes)
+    sorted_hashes = hashes[order]
+    mine = _row_hashes(new)
+    out = np.full(new.shape[0], -1, dtype=np.int64)
+    for i in range(new.shape[0]):
+        k = np.searchsorted(sorted_hashes, mine[i])
+        while k < sorted_hashes.shape[0] and sorted_hashes[k] == mine[i]:
+            r = order[k]
+            same = True
+            for c in range(w):
+                if old[r, c] != new[i, c] or (values and old_value[r, c] != new_value[i, c]):
+                    same = False
+                    break
+            if same:
+                out[i] = r
+                break
+            k += 1
+    return out

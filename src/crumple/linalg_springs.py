@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from .linalg import CSC, _csc_matvec
-from .linalg_solve import _row_dot
+from .linalg_solve import _row_dot, _row_positions
 
 
 @njit(cache=True)
@@ -144,20 +144,6 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
     return s, False, used
 
 
-@njit(cache=True)
-def _row_hashes(index):
-    """An FNV-style hash of every row of an integer array (wrapping int64 arithmetic)."""
-    m, w = index.shape
-    out = np.empty(m, dtype=np.int64)
-    for i in range(m):
-        h = np.int64(-3750763034362895579)
-        for c in range(w):
-            h = (h ^ np.int64(index[i, c])) * np.int64(1099511628211)
-        out[i] = h
-    return out
-
-
-@njit(cache=True)
 def new_rows(old, new):
     """True for every row of ``new`` that is not a row of ``old`` (both integer arrays of the
     same width): exact, rows with equal hashes compared entry by entry.
@@ -165,23 +151,7 @@ def new_rows(old, new):
     >>> new_rows(np.array([[0, 1], [2, 3]]), np.array([[2, 3], [1, 0]])).tolist()
     [False, True]
     """
-    w = old.shape[1]
-    hashes = _row_hashes(old)
-    order = np.argsort(hashes)
-    sorted_hashes = hashes[order]
-    mine = _row_hashes(new)
-    out = np.ones(new.shape[0], dtype=np.bool_)
-    for i in range(new.shape[0]):
-        k = np.searchsorted(sorted_hashes, mine[i])
-        while k < sorted_hashes.shape[0] and sorted_hashes[k] == mine[i]:
-            r = order[k]
-            same = True
-            for c in range(w):
-                if old[r, c] != new[i, c]:
-                    same = False
-                    break
-            if same:
-                out[i] = False
-                break
-            k += 1
-    return out
+    return _row_positions(old, new, _NO_VALUES, _NO_VALUES) < 0
+
+
+_NO_VALUES = np.empty((0, 0))
