@@ -730,9 +730,7 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     import crumple.minimize_barriers as minimize_module
     from crumple.linalg import Factorization
 
-    wire = Wire(k_b=5, k_s=5e5, n_segments=60)
-    ramp = Ramp(lambdas=[1.0, 40.0, 200.0, 600.0])
-    normal = run_ramp(wire, ramp, seed=1)
+    wire, ramp, normal = _contact_ramp()
     calls = []
     smw = Factorization.solve_springs
 
@@ -750,11 +748,24 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     monkeypatch.setattr(minimize_module, "spring_step", counted)
     forced = run_ramp(wire, ramp, seed=1)
     assert len(calls) > 10 and sum(calls) > 0.8 * len(calls)
-    for a, b in zip(normal.stages, forced.stages, strict=True):
-        assert b.result.converged, b.result.message  # converged: small force and stable
+    _assert_the_same_contact_equilibria(normal, forced)
+
+
+def _contact_ramp():
+    """A short ramp of the default wire (N = 60, seed 1) into contact: wire, ramp, result."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=60)
+    ramp = Ramp(lambdas=[1.0, 40.0, 200.0, 600.0])
+    return wire, ramp, run_ramp(wire, ramp, seed=1)
+
+
+def _assert_the_same_contact_equilibria(normal, other):
+    """Every stage of ``other`` converged (small force and stable), without crossing, at the
+    energy of ``normal``'s to within the force tolerance, the last one in contact."""
+    for a, b in zip(normal.stages, other.stages, strict=True):
+        assert b.result.converged, b.result.message
         assert not has_crossings(b.positions)
         assert b.energy.total == pytest.approx(a.energy.total, rel=1e-6)
-    assert forced.stages[-1].energy.hard_core > 0  # the last stage is in contact
+    assert other.stages[-1].energy.hard_core > 0
 
 
 def test_warm_started_springs_reach_the_same_contact_equilibria(monkeypatch):
@@ -764,9 +775,7 @@ def test_warm_started_springs_reach_the_same_contact_equilibria(monkeypatch):
     import crumple.minimize_barriers as minimize_module
     from crumple.linalg import Factorization
 
-    wire = Wire(k_b=5, k_s=5e5, n_segments=60)
-    ramp = Ramp(lambdas=[1.0, 40.0, 200.0, 600.0])
-    normal = run_ramp(wire, ramp, seed=1)
+    wire, ramp, normal = _contact_ramp()
     starts = []
     smw = Factorization.solve_springs
 
@@ -778,11 +787,7 @@ def test_warm_started_springs_reach_the_same_contact_equilibria(monkeypatch):
     monkeypatch.setattr(Factorization, "solve_springs", seen)
     warm = run_ramp(wire, ramp, seed=1)
     assert sum(starts) > 10  # the warm start was used
-    for a, b in zip(normal.stages, warm.stages, strict=True):
-        assert b.result.converged, b.result.message
-        assert not has_crossings(b.positions)
-        assert b.energy.total == pytest.approx(a.energy.total, rel=1e-6)
-    assert warm.stages[-1].energy.hard_core > 0
+    _assert_the_same_contact_equilibria(normal, warm)
 
 
 def test_accurate_stability_is_unused_where_the_assembled_hessian_resolves_tau(monkeypatch):
