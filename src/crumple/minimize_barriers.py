@@ -25,10 +25,10 @@ RELISTINGS = 3
 #: the springs the step before entered (those of them listed again), and a relisting's from
 #: the listing before's. The minimiser is the same (unique with positive springs); only the
 #: rounds that find its active set, and so the steps where they run out, change. Measured
-#: (docs/performance.md, "Warm-started springs"): the default N = 100 ramp's springs' solves
-#: 25 % cheaper (about 5 % of the ramp), the iterates of seeds 0, 2, 3 unchanged and those of
-#: seed 1 not; the N = 10⁴ ramp 1.1–2.3× slower (every spring of a large first set costs a
-#: solve with the factor at once), though with fewer factorisations.
+#: (docs/performance.md, "The springs' columns kept with the factor"): the default N = 100
+#: ramp's springs' solves 25 % cheaper (about 5 % of the ramp), seeds 0, 2, 3 unchanged and
+#: seed 1 not (its iterates); the N = 10⁴ ramp 1.1–2.3× slower (every spring of a large
+#: first set costs a solve with the factor at once), though with fewer factorisations.
 WARM_START = False
 
 
