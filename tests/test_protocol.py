@@ -664,6 +664,39 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
     assert budget.iterations == first.iterations and "polish" not in budget.message
 
 
+def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
+    """The polish's Newton gets ``relax_polish.POLISH_MAXITER`` iterations at most, or what is
+    left of the stage's budget where that is less; a polish stopped by it leaves the first
+    pass standing (N = 2000, ftol = 10⁻⁹, as above)."""
+    import crumple.relax_polish as rp
+
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=2000)
+    x = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[:8]), seed=0).stages[-1].positions
+    given = []
+    real = rp.newton
+
+    def spy(*args, **kw):
+        given.append(kw["maxiter"])
+        return real(*args, **kw)
+
+    monkeypatch.setattr(rp, "newton", spy)
+    monkeypatch.setattr(rp, "POLISH", False)
+    first = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    monkeypatch.setattr(rp, "POLISH", True)
+    assert given == []
+    monkeypatch.setattr(rp, "POLISH_MAXITER", 0)  # no polish at all: the first pass stands
+    none = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    assert given == [] and none.iterations == first.iterations
+    assert "converged to the force resolution" in none.message
+    monkeypatch.setattr(rp, "POLISH_MAXITER", 1)
+    one = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    assert given == [1] and one.iterations <= first.iterations + 1
+    monkeypatch.setattr(rp, "POLISH_MAXITER", 100)
+    short = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations + 2)
+    assert given == [1, 2]  # the stage's budget, where less is left of it
+    assert short.iterations <= first.iterations + 2
+
+
 def _lowest_curvature_per_length(wire, stage):
     """Lowest eigenvalue of the pencil (H, M) (M: node lengths) by dense LAPACK, an estimate
     independent of the solver's inertia count."""

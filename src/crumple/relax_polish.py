@@ -28,6 +28,14 @@ from .minimize import MinimizeResult, newton
 #: Polish a Newton stage that stopped with its forces above ftol but below their resolution
 #: (False: the engine before the tenth stop).
 POLISH = True
+#: The most Newton iterations the polish may take (within the stage's own budget, which holds for
+#: both passes). Measured (docs/performance.md, "The polish's budget"): every polish that
+#: converged took 1–14 iterations (the 44 stages of the N = 10⁴ default ramp 1–4, N = 10⁵
+#: stages 2–14), and the ones that did not ran the stage's whole budget (4863 and 4970
+#: iterations at N = 10⁵) without converging: where the hard core's curvature sets the
+#: resolution, the displacement gains nothing (see above). A failed polish changes no verdict:
+#: the first pass stands.
+POLISH_MAXITER = 100
 #: The callables of ``newton`` that take the point as their first argument.
 _AT_POINT = ("hess", "feasible", "zero_modes", "hess_action", "step_limit", "barriers")
 
@@ -46,6 +54,7 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     attempt's cost and outcome added to its message."""
     ref = np.array(first.x, dtype=np.float64)
     left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for both
+    left = min(left, POLISH_MAXITER)
     if left < 1:
         return first
     kw = dict(kw, retract=None, maxiter=left)  # straight steps: a short pass near a minimum
