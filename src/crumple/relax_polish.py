@@ -10,6 +10,13 @@ that pass is set by |u| (10⁻¹¹ after the first pass), not |x|. Every criteri
 (force, stability, the decrease test), in the displacement, on the same energy; the result is
 taken only if that pass converged with a lower largest force, else the first pass stands.
 
+Where the first pass was refused (unconverged) and the polish lowered its energy and its
+largest force without converging by its own test, its end point is tested again by the first
+pass's criteria (:func:`_rechecked`: Newton in the coordinates from there, a short pass). The
+polish's own force floor is that of the displacement and does not count the hard core's
+round-off at the float64 sum, so it can stall above it at a point the coordinates' criteria
+accept (N = 10⁵, λ = 33.39: docs/performance.md, "The polish's budget").
+
 What it does not change: the stage's positions are still float64 (x₁ + u rounded), so forces
 re-evaluated from them sit at the old resolution; the polish's ``max_force`` is that of the
 configuration x₁ + u (the sum in exact arithmetic). The hard core and the wall are evaluated at
@@ -36,6 +43,10 @@ POLISH = True
 #: resolution, the displacement gains nothing (see above). A failed polish changes no verdict:
 #: the first pass stands.
 POLISH_MAXITER = 100
+#: Where the polish lowered the energy and the forces of an unconverged first pass without
+#: converging by its own test, Newton again in the coordinates from its end point
+#: (:func:`_rechecked`), by the first pass's criteria (False: the first pass stands).
+RECHECK = True
 #: The callables of ``newton`` that take the point as their first argument.
 _AT_POINT = ("hess", "feasible", "zero_modes", "hess_action", "step_limit", "barriers")
 
@@ -57,6 +68,7 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     left = min(left, POLISH_MAXITER)
     if left < 1:
         return first
+    plain = kw
     kw = dict(kw, retract=None, maxiter=left)  # straight steps: a short pass near a minimum
 
     def at(c):
@@ -67,18 +79,46 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
         kw[name] = at(kw.get(name))
     kw["hess_fallback"] = kw["hess"] if same else at(kw.get("hess_fallback"))
     res = newton(energy.displaced(ref), np.zeros_like(ref), **kw)
-    cost = {
-        "iterations": first.iterations + res.iterations,
-        "evaluations": first.evaluations + res.evaluations,
-        "hessian_evaluations": first.hessian_evaluations + res.hessian_evaluations,
-        "factorizations": first.factorizations + res.factorizations,
-        "krylov_iterations": first.krylov_iterations + res.krylov_iterations,
-        "curved_steps": first.curved_steps,
-    }
+    cost = _cost(first, res)
     if res.converged and res.max_force < first.max_force:
         message = (f"{res.message}; polished in the displacement ({res.iterations} iterations) "
                    f"after a first pass of {first.iterations}: {first.message}")  # fmt: skip
         return dataclasses.replace(res, x=ref + res.x, ftol=ftol, message=message, **cost)
+    note = ""
+    if _recheck_due(first, res):
+        third = _rechecked(energy, ref + res.x, plain, cost)
+        if third is not None:
+            cost = _cost(first, res, third)
+            where = (f"rechecked in the coordinates ({third.iterations} iterations) from the end "
+                     f"of a polish in the displacement ({res.iterations} iterations: "
+                     f"{res.message})")  # fmt: skip
+            if third.converged:
+                message = (f"{third.message}; {where}, after a first pass of {first.iterations}: "
+                           f"{first.message}")  # fmt: skip
+                return dataclasses.replace(third, ftol=ftol, message=message, **cost)
+            note = f"; {where}: {third.message}"
     message = (f"{first.message}; not polished ({res.iterations} iterations in the "
-               f"displacement: {res.message})")  # fmt: skip
+               f"displacement: {res.message}){note}")  # fmt: skip
     return dataclasses.replace(first, message=message, **cost)
+
+
+def _cost(*passes: MinimizeResult) -> dict:
+    """The counts of a stage made of several Newton passes, added up."""
+    names = ("iterations", "evaluations", "hessian_evaluations", "factorizations",
+             "krylov_iterations", "curved_steps")  # fmt: skip
+    return {k: sum(getattr(p, k) for p in passes) for k in names}
+
+
+def _recheck_due(first: MinimizeResult, res: MinimizeResult) -> bool:
+    """Whether the polish ``res`` of an unconverged first pass ended lower in energy and in
+    force without converging by its own test: then its end point is tested again."""
+    return (RECHECK and not first.converged and res.energy < first.energy
+            and res.max_force < first.max_force)  # fmt: skip
+
+
+def _rechecked(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
+    """Newton in the coordinates from ``x`` (the end point of a polish) with the first pass's
+    keywords ``kw`` and criteria, within ``POLISH_MAXITER`` and what is left of the stage's
+    budget after ``cost``; None when nothing is left."""
+    left = min(int(kw.get("maxiter", 500)) - cost["iterations"], POLISH_MAXITER)
+    return newton(energy, x, **dict(kw, maxiter=left)) if left >= 1 else None
