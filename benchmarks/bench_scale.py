@@ -118,12 +118,23 @@ def _stage_line(n):
         res = st.result
         print(f"    N = {n}, stage {i + 1}/{total}, λ = {st.lam:.4g}: {res.iterations} "
               f"iterations, converged {res.converged}, max force {res.max_force:.2g}, "
-              f"bending {st.energy.bending:.3g}, {time.process_time() - t0:.0f} s CPU",
-              file=sys.stderr, flush=True)  # fmt: skip
+              f"bending {st.energy.bending:.3g}, {time.process_time() - t0:.0f} s CPU"
+              f"{_passes(res.message)}", file=sys.stderr, flush=True)  # fmt: skip
         if not res.converged:
             print(f"      {res.message}", file=sys.stderr, flush=True)
 
     return line
+
+
+def _passes(message: str) -> str:
+    """The passes after the first that a stage's message reports (``relax_polish``): the
+    polish in the displacement and the recheck in the coordinates, with their iterations."""
+    import re
+
+    passes = ("polished in the displacement", "not polished", "a polish in the displacement",
+              "rechecked in the coordinates")  # fmt: skip
+    found = re.findall(rf"({'|'.join(passes)}) \((\d+) iterations", message)
+    return "".join(f"; {what} {its} its" for what, its in found)
 
 
 def bench_decrease(ns=(10_000,), trap=0.0):
