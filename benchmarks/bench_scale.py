@@ -128,13 +128,18 @@ def _stage_line(n):
 
 def _passes(message: str) -> str:
     """The passes after the first that a stage's message reports (``relax_polish``): the
-    polish in the displacement and the recheck in the coordinates, with their iterations."""
+    polish in the displacement, and the retry in the coordinates from its end, with their
+    iterations."""
     import re
 
-    passes = ("polished in the displacement", "not polished", "a polish in the displacement",
-              "rechecked in the coordinates")  # fmt: skip
-    found = re.findall(rf"({'|'.join(passes)}) \((\d+) iterations", message)
-    return "".join(f"; {what} {its} its" for what, its in found)
+    labels = {
+        "polished in the displacement": "polished",
+        "not polished": "polish failed",
+        "from the end of a polish": "polish failed",
+        "retried in the coordinates": "retry",
+    }
+    found = re.findall(rf"({'|'.join(labels)}) \((\d+) iterations", message)
+    return "".join(f"; {labels[what]} {its} its" for what, its in found)
 
 
 def bench_decrease(ns=(10_000,), trap=0.0):

@@ -690,7 +690,8 @@ def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
     assert "converged to the force resolution" in none.message
     monkeypatch.setattr(rp, "POLISH_MAXITER", 1)
     one = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
-    assert given == [1] and one.iterations <= first.iterations + 1
+    assert given == [1] and one.iterations == first.iterations + 1
+    assert "(1 iterations" in one.message
     monkeypatch.setattr(rp, "POLISH_MAXITER", 100)
     short = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations + 2)
     assert given == [1, 2]  # the stage's budget, where less is left of it
@@ -701,19 +702,24 @@ def _result(x, energy, max_force, converged, iterations, message):
     return MinimizeResult(x=x, energy=energy, max_force=max_force, iterations=iterations,
                           evaluations=iterations + 1, hessian_evaluations=iterations,
                           converged=converged, ftol=1e-6, message=message, method="newton",
-                          factorizations=2 * iterations, force_resolution=0.2)  # fmt: skip
+                          factorizations=2 * iterations, force_resolution=0.2,
+                          curved_steps=iterations // 10,
+                          krylov_iterations=3 * iterations)  # fmt: skip
 
 
-@pytest.mark.parametrize("case", ["converges", "does not", "converged first", "higher", "off"])
-def test_a_polish_that_lowers_an_unconverged_stage_is_rechecked_in_the_coordinates(
-    monkeypatch, case
-):
+@pytest.mark.parametrize(
+    "case",
+    ["converges", "does not", "no budget", "short budget", "converged first", "higher",
+     "more force", "off"],
+)  # fmt: skip
+def test_a_polish_that_lowers_an_unconverged_stage_is_retried_in_the_coordinates(monkeypatch, case):
     """A first pass refused at its force resolution (unconverged), whose polish lowers the
     energy and the forces without converging by its own test (N = 10⁵, λ = 33.39 on the AMD
     machine, docs/performance.md "The polish's budget"): Newton again in the coordinates from
     the polish's end point, with the first pass's own keywords and criteria. Its result is the
-    stage's only if it converged; the counts of the three passes add up. Not where the first
-    pass converged, where the polish went up in energy, or with ``RECHECK`` off. The passes are
+    stage's only if it converged; the counts of the three passes add up, and the stage's
+    budget holds for all three. Not where the first pass converged, where the polish went up
+    in energy or in force, where no budget is left, or with ``RETRY`` off. The passes are
     scripted; the test is of what ``_polished`` does with them."""
     import crumple.relax_polish as rp
 
@@ -722,36 +728,42 @@ def test_a_polish_that_lowers_an_unconverged_stage_is_rechecked_in_the_coordinat
     x1 = initial_state(wire, 0.01, seed=0)
     u = np.full_like(x1, 1e-9)
     first = _result(x1, 1.5, 0.035, case == "converged first", 30, "first pass")
-    polish = _result(u, 1.5 - (-1e-6 if case == "higher" else 1e-6), 0.0012, False, 100,
+    polish = _result(u, 1.5 + (1e-6 if case == "higher" else -1e-6),
+                     0.05 if case == "more force" else 0.0012, False, 100,
                      "maximum number of iterations reached")  # fmt: skip
-    recheck = _result(x1 + u, 1.5 - 1e-6, 0.009, case != "does not", 1, "rechecked point")
+    retry = _result(x1 + u, 1.5 - 1e-6, 0.009, case != "does not", 1, "retried point")
     calls = []
 
     def scripted(fun, x0, **kw):
         calls.append((fun, np.array(x0), kw))
-        return polish if len(calls) == 1 else recheck
+        return polish if len(calls) == 1 else retry
 
     hess = object()
-    kw = {"maxiter": 5000, "hess": hess, "hess_fallback": hess, "retract": object()}
+    budget = {"no budget": 130, "short budget": 135}.get(case, 5000)
+    kw = {"maxiter": budget, "hess": hess, "hess_fallback": hess, "retract": object()}
     monkeypatch.setattr(rp, "newton", scripted)
-    monkeypatch.setattr(rp, "RECHECK", case != "off")
+    monkeypatch.setattr(rp, "RETRY", case != "off")
     out = rp._polished(energy, first, kw, 1e-6)
-    if case in ("converged first", "higher", "off"):
-        assert len(calls) == 1 and out.x is x1 and "rechecked" not in out.message
-        assert out.iterations == 130
+    if case in ("converged first", "higher", "more force", "off", "no budget"):
+        assert len(calls) == 1 and out.x is x1 and "retried" not in out.message
+        assert out.iterations == 130 and out.curved_steps == 3 + 10
+        assert out.message == ("first pass; not polished (100 iterations in the displacement: "
+                               "maximum number of iterations reached)")  # fmt: skip
         return
     assert len(calls) == 2
     fun, start, again = calls[1]
     assert fun is energy and np.array_equal(start, x1 + u)
     assert again["hess"] is hess and again["retract"] is kw["retract"]  # the first pass's own
-    assert again["maxiter"] == rp.POLISH_MAXITER
+    assert again["maxiter"] == (5 if case == "short budget" else rp.POLISH_MAXITER)
     assert out.iterations == 131 and out.factorizations == 262 and out.evaluations == 134
-    if case == "converges":
-        assert out.converged and out.x is recheck.x and out.max_force == 0.009
-        assert out.message.startswith("rechecked point; rechecked in the coordinates")
-    else:
+    assert out.krylov_iterations == 3 * 131 and out.curved_steps == 3 + 10 + 0
+    if case == "does not":
         assert not out.converged and out.x is x1 and out.max_force == 0.035
-        assert "not polished" in out.message and out.message.endswith(": rechecked point")
+        assert "not polished" in out.message
+        assert out.message.endswith("; retried in the coordinates (1 iterations: retried point)")
+    else:
+        assert out.converged and out.x is retry.x and out.max_force == 0.009
+        assert out.message.startswith("retried point; retried in the coordinates (1 iterations)")
 
 
 def _lowest_curvature_per_length(wire, stage):

@@ -8,20 +8,22 @@ there, :func:`_polished` minimises again in u = x − x₁ from its end point x�
 terms from the segments' sums (:meth:`crumple.energy.WireEnergy.displaced`): the resolution of
 that pass is set by |u| (10⁻¹¹ after the first pass), not |x|. Every criterion is Newton's own
 (force, stability, the decrease test), in the displacement, on the same energy; the result is
-taken only if that pass converged with a lower largest force, else the first pass stands.
+taken only if that pass converged with a lower largest force.
 
-Where the first pass was refused (unconverged) and the polish lowered its energy and its
-largest force without converging by its own test, its end point is tested again by the first
-pass's criteria (:func:`_rechecked`: Newton in the coordinates from there, a short pass). The
-polish's own force floor is that of the displacement and does not count the hard core's
-round-off at the float64 sum, so it can stall above it at a point the coordinates' criteria
-accept (N = 10⁵, λ = 33.39: docs/performance.md, "The polish's budget").
+Where the first pass did not converge (refused by the decrease test, or stopped at an unstable
+equilibrium) and the polish lowered its energy and its largest force without converging by its
+own test, the polish's end point is tried again by the first pass's criteria
+(:func:`_retried`: Newton in the coordinates from there, a short pass). The polish's own force
+floor is that of the displacement and does not count the hard core's round-off at the float64
+sum, so it can stall above it at a point that the coordinates' criteria accept (N = 10⁵,
+λ = 33.39: docs/performance.md, "The polish's budget"). That pass is a fresh ``newton``: its
+trust radius, saddle escapes and refusals start again. Otherwise the first pass stands.
 
 What it does not change: the stage's positions are still float64 (x₁ + u rounded), so forces
 re-evaluated from them sit at the old resolution; the polish's ``max_force`` is that of the
 configuration x₁ + u (the sum in exact arithmetic). The hard core and the wall are evaluated at
-the rounded sum, so where their curvature dominates the resolution the polish gains nothing
-and the first pass stands.
+the rounded sum, so where their curvature dominates the resolution the polish in the
+displacement gains nothing by its own test.
 """
 
 from __future__ import annotations
@@ -35,18 +37,16 @@ from .minimize import MinimizeResult, newton
 #: Polish a Newton stage that stopped with its forces above ftol but below their resolution
 #: (False: the engine before the tenth stop).
 POLISH = True
-#: The most Newton iterations the polish may take (within the stage's own budget, which holds for
-#: both passes). Measured (docs/performance.md, "The polish's budget"): every polish that
-#: converged took 1–14 iterations (the 44 stages of the N = 10⁴ default ramp 1–4, N = 10⁵
-#: stages 2–14), and the ones that did not ran the stage's whole budget (4863 and 4970
-#: iterations at N = 10⁵) without converging: where the hard core's curvature sets the
-#: resolution, the displacement gains nothing (see above). A failed polish changes no verdict:
-#: the first pass stands.
+#: The most Newton iterations the polish may take, and the retry after it (within the stage's
+#: own budget, which holds for all its passes). Measured (docs/performance.md, "The polish's
+#: budget"): every polish that converged took 1–14 iterations (the 44 stages of the N = 10⁴
+#: default ramp 1–4, N = 10⁵ stages 2–14), and the ones that did not ran the stage's whole
+#: budget (4863 and 4970 iterations at N = 10⁵) without converging by their own test.
 POLISH_MAXITER = 100
 #: Where the polish lowered the energy and the forces of an unconverged first pass without
 #: converging by its own test, Newton again in the coordinates from its end point
-#: (:func:`_rechecked`), by the first pass's criteria (False: the first pass stands).
-RECHECK = True
+#: (:func:`_retried`), by the first pass's criteria (False: the first pass stands).
+RETRY = True
 #: The callables of ``newton`` that take the point as their first argument.
 _AT_POINT = ("hess", "feasible", "zero_modes", "hess_action", "step_limit", "barriers")
 
@@ -61,8 +61,9 @@ def _needs_polish(first: MinimizeResult, ftol: float) -> bool:
 
 def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeResult:
     """Newton in the displacement from ``first.x`` (``kw``: the first pass's keywords); the
-    polished result if it converged below the first's largest force, else ``first`` with the
-    attempt's cost and outcome added to its message."""
+    polished result if it converged below the first's largest force; else, where due
+    (:func:`_retry_due`), the retry's from the polish's end point if that converged; else
+    ``first``. The counts of every pass are added, and the message says what each did."""
     ref = np.array(first.x, dtype=np.float64)
     left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for both
     left = min(left, POLISH_MAXITER)
@@ -84,21 +85,19 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
         message = (f"{res.message}; polished in the displacement ({res.iterations} iterations) "
                    f"after a first pass of {first.iterations}: {first.message}")  # fmt: skip
         return dataclasses.replace(res, x=ref + res.x, ftol=ftol, message=message, **cost)
+    polish = f"({res.iterations} iterations in the displacement: {res.message})"
     note = ""
-    if _recheck_due(first, res):
-        third = _rechecked(energy, ref + res.x, plain, cost)
+    if _retry_due(first, res):
+        third = _retried(energy, ref + res.x, plain, cost)
         if third is not None:
             cost = _cost(first, res, third)
-            where = (f"rechecked in the coordinates ({third.iterations} iterations) from the end "
-                     f"of a polish in the displacement ({res.iterations} iterations: "
-                     f"{res.message})")  # fmt: skip
             if third.converged:
-                message = (f"{third.message}; {where}, after a first pass of {first.iterations}: "
-                           f"{first.message}")  # fmt: skip
+                message = (f"{third.message}; retried in the coordinates ({third.iterations} "
+                           f"iterations) from the end of a polish {polish}, after a first pass "
+                           f"of {first.iterations}: {first.message}")  # fmt: skip
                 return dataclasses.replace(third, ftol=ftol, message=message, **cost)
-            note = f"; {where}: {third.message}"
-    message = (f"{first.message}; not polished ({res.iterations} iterations in the "
-               f"displacement: {res.message}){note}")  # fmt: skip
+            note = f"; retried in the coordinates ({third.iterations} iterations: {third.message})"
+    message = f"{first.message}; not polished {polish}{note}"
     return dataclasses.replace(first, message=message, **cost)
 
 
@@ -109,14 +108,14 @@ def _cost(*passes: MinimizeResult) -> dict:
     return {k: sum(getattr(p, k) for p in passes) for k in names}
 
 
-def _recheck_due(first: MinimizeResult, res: MinimizeResult) -> bool:
+def _retry_due(first: MinimizeResult, res: MinimizeResult) -> bool:
     """Whether the polish ``res`` of an unconverged first pass ended lower in energy and in
-    force without converging by its own test: then its end point is tested again."""
-    return (RECHECK and not first.converged and res.energy < first.energy
+    force without converging by its own test: then its end point is tried again."""
+    return (RETRY and not first.converged and res.energy < first.energy
             and res.max_force < first.max_force)  # fmt: skip
 
 
-def _rechecked(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
+def _retried(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
     """Newton in the coordinates from ``x`` (the end point of a polish) with the first pass's
     keywords ``kw`` and criteria, within ``POLISH_MAXITER`` and what is left of the stage's
     budget after ``cost``; None when nothing is left."""
