@@ -698,6 +698,23 @@ def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
     assert short.iterations <= first.iterations + 2
 
 
+def test_no_wire_of_at_most_a_thousand_segments_is_polished(monkeypatch):
+    """The polish and its retry act above ``relax.ACCURATE_STEPS_ABOVE`` = 1000 segments only,
+    so the reproduction's ramps (N ≤ 1000) keep their iterates: at N = 1000 a stage that stops
+    at its force resolution above ftol (the polish's condition) is the first pass alone."""
+    import crumple.relax_polish as rp
+
+    def refused(*args, **kw):
+        raise AssertionError("polished at N = 1000")
+
+    monkeypatch.setattr(relax, "_polished", refused)
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=1000)
+    x = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[:3]), seed=0).stages[-1].positions
+    res = relax.minimize_wire(wire, x, 10.0, ftol=1e-12)
+    assert rp._needs_polish(res, 1e-12), res.message
+    assert res.converged and "polish" not in res.message
+
+
 def _result(x, energy, max_force, converged, iterations, message):
     return MinimizeResult(x=x, energy=energy, max_force=max_force, iterations=iterations,
                           evaluations=iterations + 1, hessian_evaluations=iterations,
