@@ -39,9 +39,10 @@ from .minimize import MinimizeResult, newton
 POLISH = True
 #: The most Newton iterations the polish may take, and the retry after it (within the stage's
 #: own budget, which holds for all its passes). Measured (docs/performance.md, "The polish's
-#: budget"): every polish that converged took 1–14 iterations (the 34 polished stages of the
-#: N = 10⁴ default ramp 1–4, N = 10⁵ stages 2–14), and the ones that did not ran the stage's whole
-#: budget (4863 and 4970 iterations at N = 10⁵) without converging by their own test.
+#: budget"): every polish that converged and was counted took 1–14 iterations (the 34
+#: polished stages of the N = 10⁴ default ramp 1–4, N = 10⁵ stages 2–14), and the ones that
+#: did not ran the stage's whole budget (4863 and 4970 iterations at N = 10⁵) without
+#: converging by their own test.
 POLISH_MAXITER = 100
 #: Where the polish lowered the energy and the forces of an unconverged first pass without
 #: converging by its own test, Newton again in the coordinates from its end point
