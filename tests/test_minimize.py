@@ -1611,3 +1611,30 @@ def test_an_exact_fallback_reuses_the_hessian_it_has_just_evaluated(fixed):
     assert a.converged and b.converged
     assert np.array_equal(a.x, b.x) and a.iterations == b.iterations
     assert a.hessian_evaluations == calls["same"] < calls["other"] == b.hessian_evaluations
+
+
+def test_newton_stops_where_it_no_longer_makes_progress():
+    """``patience``: a pass whose energy stays within its resolution (16 ε|E|) for that many
+    iterations stops, unconverged, and says so. On 10²⁰ + |x|²/2 with a Hessian 10⁶ too stiff,
+    every step lowers the energy by ~|x|²/10⁶, far below 16 ε × 10²⁰: without ``patience``
+    the pass runs to ``maxiter``; on |x|²/2 itself each step is a real decrease, and
+    ``patience`` does not stop it."""
+    from crumple.minimize import newton
+
+    def flat(x):
+        return float(1e20 + 0.5 * x @ x), x.copy()
+
+    def bowl(x):
+        return float(0.5 * x @ x), x.copy()
+
+    def stiff(x):
+        return 1e6 * np.eye(2)
+
+    r = newton(flat, np.ones(2), hess=stiff, maxiter=200, patience=5)
+    assert not r.converged and r.iterations == 5
+    assert r.message == "stopped: no decrease beyond the energy's resolution in 5 iterations"
+    assert newton(flat, np.ones(2), hess=stiff, maxiter=200).iterations == 200
+    r = newton(bowl, np.ones(2), hess=lambda x: 1e3 * np.eye(2), maxiter=30, patience=5)
+    assert r.iterations == 30 and r.message == "maximum number of iterations reached"
+    with pytest.raises(ValueError, match="patience"):
+        newton(bowl, np.ones(2), hess=stiff, patience=0)

@@ -664,10 +664,11 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
     assert budget.iterations == first.iterations and "polish" not in budget.message
 
 
-def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
-    """The polish's Newton gets ``relax_polish.POLISH_MAXITER`` iterations at most, or what is
-    left of the stage's budget where that is less; a polish stopped by it leaves the first
-    pass standing (N = 2000, ftol = 10⁻⁹, as above)."""
+def test_the_polish_stops_where_it_no_longer_makes_progress(monkeypatch):
+    """The polish's Newton runs with ``relax_polish.POLISH_PATIENCE`` (it stops once that many
+    iterations pass without the energy going lower beyond its resolution) and with what is
+    left of the stage's budget; none left, no polish: the first pass stands (N = 2000,
+    ftol = 10⁻⁹, as above)."""
     import crumple.relax_polish as rp
 
     wire = Wire.from_continuum(**CONTINUUM, n_segments=2000)
@@ -676,7 +677,7 @@ def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
     real = rp.newton
 
     def spy(*args, **kw):
-        given.append(kw["maxiter"])
+        given.append((kw["maxiter"], kw["patience"]))
         return real(*args, **kw)
 
     monkeypatch.setattr(rp, "newton", spy)
@@ -684,17 +685,14 @@ def test_the_polish_takes_at_most_its_own_budget(monkeypatch):
     first = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
     monkeypatch.setattr(rp, "POLISH", True)
     assert given == []
-    monkeypatch.setattr(rp, "POLISH_MAXITER", 0)  # no polish at all: the first pass stands
-    none = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    none = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations)
     assert given == [] and none.iterations == first.iterations
     assert "converged to the force resolution" in none.message
-    monkeypatch.setattr(rp, "POLISH_MAXITER", 1)
-    one = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
-    assert given == [1] and one.iterations == first.iterations + 1
-    assert "(1 iterations" in one.message
-    monkeypatch.setattr(rp, "POLISH_MAXITER", 100)
+    polished = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    assert given == [(5000 - first.iterations, rp.POLISH_PATIENCE)]
+    assert polished.converged and "polished in the displacement" in polished.message
     short = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations + 2)
-    assert given == [1, 2]  # the stage's budget, where less is left of it
+    assert given[-1] == (2, rp.POLISH_PATIENCE)  # the stage's budget, where less is left of it
     assert short.iterations <= first.iterations + 2
 
 
@@ -771,7 +769,8 @@ def test_a_polish_that_lowers_an_unconverged_stage_is_retried_in_the_coordinates
     fun, start, again = calls[1]
     assert fun is energy and np.array_equal(start, x1 + u)
     assert again["hess"] is hess and again["retract"] is kw["retract"]  # the first pass's own
-    assert again["maxiter"] == (5 if case == "short budget" else rp.POLISH_MAXITER)
+    assert again["maxiter"] == (5 if case == "short budget" else 5000 - 130)
+    assert again["patience"] == rp.POLISH_PATIENCE
     assert out.iterations == 131 and out.factorizations == 262 and out.evaluations == 134
     assert out.krylov_iterations == 3 * 131 and out.curved_steps == 3 + 10 + 0
     if case == "does not":

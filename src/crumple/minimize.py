@@ -83,6 +83,7 @@ def newton(
     retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
     shift_descents: int | None = None,
     accurate_steps: bool = False,
+    patience: int | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -210,6 +211,10 @@ def newton(
         lists springs, the springs' step is refined by CG on the product instead
         (``minimize_krylov._accurate_spring_step``). Off by default
         (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
+    patience : int, optional
+        Stop, unconverged, once this many iterations have passed without the energy going
+        below its lowest value by more than its resolution (:func:`resolution`): a pass that
+        no longer makes progress (the polish of ``crumple.relax_polish``). None: no such stop.
 
     Returns
     -------
@@ -246,6 +251,10 @@ def newton(
     st.hess_action = hess_action
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     st.accurate_steps = bool(accurate_steps)
+    if patience is not None:
+        if int(patience) < 1:
+            raise ValueError(f"patience must be >= 1, got {patience!r}")
+        patience, st.best = int(patience), st.e
     ldl = LDLT()
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -273,9 +282,23 @@ def newton(
             message = failure + (f" (the point returned {st.refine_note})" if st.refine else "")
             break
         st.refine = False
+        if _out_of_patience(st, patience):
+            message = (f"stopped: no decrease beyond the energy's resolution in {patience} "
+                       "iterations")  # fmt: skip
+            break
         if callback is not None:
             callback(st.it, st.x, st.e, st.fmax)
     return _result(st, ldl, ftol, message)
+
+
+def _out_of_patience(st, patience) -> bool:
+    """Whether ``patience`` iterations have passed since the energy last went below its lowest
+    value by more than its resolution (``st.best``, ``st.best_it`` updated); never for None."""
+    if patience is None:
+        return False
+    if st.best is None or st.e < st.best - resolution(st.best):
+        st.best, st.best_it = st.e, st.it
+    return st.it - st.best_it >= patience
 
 
 def _equilibrium(st, fun, h, ftol, m, ldl, floor, zero_modes, max_escapes, step_limit, feasible):
@@ -467,6 +490,8 @@ class _State:
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
     entered: np.ndarray | None = None  # the index rows of the springs that step entered
     pending: np.ndarray | None = None  # a refused point's step, for the next iteration
+    best: float | None = None  # the lowest energy by more than its resolution (``patience``)
+    best_it: int = 0  # the iteration that reached it
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:

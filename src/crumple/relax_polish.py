@@ -37,13 +37,14 @@ from .minimize import MinimizeResult, newton
 #: Polish a Newton stage that stopped with its forces above ftol but below their resolution
 #: (False: the engine before the tenth stop).
 POLISH = True
-#: The most Newton iterations the polish may take, and the retry after it (within the stage's
-#: own budget, which holds for all its passes). Measured (docs/performance.md, "The polish's
-#: budget"): every polish that converged and was counted took 1–14 iterations (the 34
-#: polished stages of the N = 10⁴ default ramp 1–4, N = 10⁵ stages 2–14), and the ones that
-#: did not ran the stage's whole budget (4863 and 4970 iterations at N = 10⁵) without
-#: converging by their own test.
-POLISH_MAXITER = 100
+#: The polish, and the retry after it, stop once this many iterations have passed without the
+#: energy going below its lowest value by more than its resolution (``newton(patience=...)``),
+#: within the stage's own budget, which holds for all its passes. Measured (docs/performance.md,
+#: "The polish's budget"): polishes that stalled ran the stage's whole budget (4863 and 4970
+#: iterations at N = 10⁵) without converging by their own test, the energy constant to 14
+#: digits (λ = 33.39); and a polish that does converge can take hundreds of iterations of real
+#: descent (λ = 420.6), which a cap on its iterations (100, tried first) cut short.
+POLISH_PATIENCE = 20
 #: Where the polish lowered the energy and the forces of an unconverged first pass without
 #: converging by its own test, Newton again in the coordinates from its end point
 #: (:func:`_retried`), by the first pass's criteria (False: the first pass stands).
@@ -66,12 +67,12 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     (:func:`_retry_due`), the retry's from the polish's end point if that converged; else
     ``first``. The counts of every pass are added, and the message says what each did."""
     ref = np.array(first.x, dtype=np.float64)
-    left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for both
-    left = min(left, POLISH_MAXITER)
+    left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for all
     if left < 1:
         return first
     plain = kw
-    kw = dict(kw, retract=None, maxiter=left)  # straight steps: a short pass near a minimum
+    # straight steps (a pass near a minimum), stopped where it no longer makes progress
+    kw = dict(kw, retract=None, maxiter=left, patience=POLISH_PATIENCE)
 
     def at(c):
         return None if c is None else (lambda u, *args: c(ref + u, *args))
@@ -118,7 +119,9 @@ def _retry_due(first: MinimizeResult, res: MinimizeResult) -> bool:
 
 def _retried(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
     """Newton in the coordinates from ``x`` (the end point of a polish) with the first pass's
-    keywords ``kw`` and criteria, within ``POLISH_MAXITER`` and what is left of the stage's
+    keywords ``kw`` and criteria, within ``POLISH_PATIENCE`` and what is left of the stage's
     budget after ``cost``; None when nothing is left."""
-    left = min(int(kw.get("maxiter", 500)) - cost["iterations"], POLISH_MAXITER)
-    return newton(energy, x, **dict(kw, maxiter=left)) if left >= 1 else None
+    left = int(kw.get("maxiter", 500)) - cost["iterations"]
+    if left < 1:
+        return None
+    return newton(energy, x, **dict(kw, maxiter=left, patience=POLISH_PATIENCE))
