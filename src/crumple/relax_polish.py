@@ -15,8 +15,9 @@ equilibrium) and the polish lowered its energy and its largest force without con
 own test, the polish's end point is tried again by the first pass's criteria
 (:func:`_retried`: Newton in the coordinates from there, a short pass). The polish can stall
 above its own force floor at a point that the coordinates' criteria accept (N = 10⁵,
-λ = 33.39, at a contact of the wire's end: docs/performance.md, "The polish's budget"). That pass is a fresh ``newton``: its
-trust radius, saddle escapes and refusals start again. Otherwise the first pass stands.
+λ = 33.39, at a contact of the wire's end: docs/performance.md, "The polish's budget"). That
+pass is a fresh ``newton``: its trust radius, saddle escapes and refusals start again.
+Otherwise the first pass stands.
 
 What it does not change: the stage's positions are still float64 (x₁ + u rounded), so forces
 re-evaluated from them sit at the old resolution; the polish's ``max_force`` is that of the
