@@ -13,7 +13,7 @@ taken only if that pass converged with a lower largest force.
 Where the first pass did not converge (refused by the decrease test, or stopped at an unstable
 equilibrium) and the polish lowered its energy and its largest force without converging by its
 own test, the polish's end point is tried again by the first pass's criteria
-(:func:`_retried`: Newton in the coordinates from there, a short pass). The polish can stall
+(:func:`_retried`: Newton in the coordinates from there). The polish can stall
 above its own force floor at a point that the coordinates' criteria accept (N = 10⁵,
 λ = 33.39, at a contact of the wire's end: docs/performance.md, "The polish's budget"). That
 pass is a fresh ``newton``: its trust radius, saddle escapes and refusals start again.
