@@ -296,7 +296,7 @@ def _out_of_patience(st, patience) -> bool:
     value by more than its resolution (``st.best``, ``st.best_it`` updated); never for None."""
     if patience is None:
         return False
-    if st.best is None or st.e < st.best - resolution(st.best):
+    if st.e < st.best - resolution(st.best):  # st.best: the start's energy, set by newton
         st.best, st.best_it = st.e, st.it
     return st.it - st.best_it >= patience
 
