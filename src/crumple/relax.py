@@ -190,65 +190,15 @@ def minimize_wire(
     True
     """
     exact = resolve_fallback(fallback, wire) == "exact"
+    if method not in ("newton", "powell"):
+        raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
+    x0, fixed = _checked_start(wire, positions, fixed, method)
     energy = WireEnergy(wire, lam, rest_angles=rest_angles)
-    x0 = np.array(positions, dtype=np.float64)
-    if x0.shape != (wire.n_nodes, 2):
-        raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
-    if has_crossings(x0):
-        raise ValueError("the starting configuration crosses itself")
     radius = wire.cavity_radius
-    if radius is not None and not _inside(x0, radius):
-        worst = float(np.max(np.hypot(*x0.T)))
-        raise ValueError(
-            f"the starting configuration leaves the cavity: a node at |x| = {worst:.6g} >= "
-            f"cavity_radius {radius:.6g}"
-        )
-    free_rotation = True
-    curved = CURVED_STEPS if curved_steps is None else bool(curved_steps)
-    if fixed is not None:
-        fixed = np.asarray(fixed)
-        if fixed.dtype != np.bool_ or fixed.shape != (wire.n_nodes,):
-            raise ValueError(f"fixed must be a boolean array of shape ({wire.n_nodes},)")
-        if method != "newton":
-            raise ValueError("fixed nodes need method='newton'")
-        free_rotation = not fixed.any()
-        curved = curved and free_rotation
 
     def feasible(x):  # x: the minimiser's own finite (n_nodes, 2) array, checked no further
         return (radius is None or _inside(x, radius)) and not _has_crossings(x)
 
-    if method == "newton":
-        hess = energy.hessian_csc  # one bound method: the fallback below is this very object
-        kw = dict(
-            hess=hess,
-            # contacts projected on their positive part; bending and stretching exact (measured:
-            # projecting the joints too doubled the iterations of the default ramp). The exact
-            # fallback is `hess` itself, so the minimiser reuses the H it has just evaluated.
-            hess_fallback=hess
-            if exact
-            else (lambda x: energy.hessian_csc(x, project_contacts=True)),
-            shift_descents=EXACT_SHIFT_DESCENTS if exact else 0,
-            ftol=ftol,
-            maxiter=maxiter,
-            max_step=max_step,
-            step_limit=_step_limit(radius),
-            feasible=feasible,
-            curvature_tol=STABILITY_TOL,
-            metric=node_lengths(wire),
-            zero_modes=(lambda x: _symmetry_modes(x, wire, lam)) if free_rotation else None,
-            fixed=fixed,
-            barriers=_barriers(energy, wire) if anticipate_contacts else None,
-            # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
-            # element-form product (crumple.energy_action); on unless ACCURATE_STABILITY is off
-            hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
-            retract=_curved_retraction(energy) if curved else None,
-            accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
-        )
-        res = newton(energy, x0, **kw)
-        # a stage that stopped at the force resolution of its positions: Newton again in the
-        # displacement from its end, the elastic forces from the segments' sums (relax_polish)
-        large = wire.n_segments > ACCURATE_STEPS_ABOVE
-        return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
     if method == "powell":
         if rng is None:
             raise ValueError("Powell needs a random generator for its directions (rng=...)")
@@ -267,7 +217,65 @@ def minimize_wire(
             step=POWELL_STEP * wire.rest_length,
             reach=reach,
         )
-    raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
+    kw = _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts)
+    kw.update(ftol=ftol, maxiter=maxiter, max_step=max_step, feasible=feasible)
+    res = newton(energy, x0, **kw)
+    # a stage that stopped at the force resolution of its positions: Newton again in the
+    # displacement from its end, the elastic forces from the segments' sums (relax_polish)
+    large = wire.n_segments > ACCURATE_STEPS_ABOVE
+    return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
+
+
+def _checked_start(wire: Wire, positions, fixed, method):
+    """The start as a float array and ``fixed`` as a boolean mask (or None), checked: the
+    shape, no crossing, inside the cavity, and fixed nodes only with Newton."""
+    x0 = np.array(positions, dtype=np.float64)
+    if x0.shape != (wire.n_nodes, 2):
+        raise ValueError(f"positions must have shape ({wire.n_nodes}, 2), got {x0.shape}")
+    if has_crossings(x0):
+        raise ValueError("the starting configuration crosses itself")
+    radius = wire.cavity_radius
+    if radius is not None and not _inside(x0, radius):
+        worst = float(np.max(np.hypot(*x0.T)))
+        raise ValueError(
+            f"the starting configuration leaves the cavity: a node at |x| = {worst:.6g} >= "
+            f"cavity_radius {radius:.6g}"
+        )
+    if fixed is not None:
+        fixed = np.asarray(fixed)
+        if fixed.dtype != np.bool_ or fixed.shape != (wire.n_nodes,):
+            raise ValueError(f"fixed must be a boolean array of shape ({wire.n_nodes},)")
+        if method != "newton":
+            raise ValueError("fixed nodes need method='newton'")
+    return x0, fixed
+
+
+def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts) -> dict:
+    """:func:`crumple.minimize.newton`'s keywords for this wire and energy (``exact``: the
+    exact fallback), but the stopping rule, the step cap and the feasibility test
+    (:func:`minimize_wire` adds them)."""
+    free_rotation = fixed is None or not fixed.any()  # with any node fixed, no rigid motion
+    curved = (CURVED_STEPS if curved_steps is None else bool(curved_steps)) and free_rotation
+    hess = energy.hessian_csc  # one bound method: the fallback below is this very object
+    return dict(
+        hess=hess,
+        # contacts projected on their positive part; bending and stretching exact (measured:
+        # projecting the joints too doubled the iterations of the default ramp). The exact
+        # fallback is `hess` itself, so the minimiser reuses the H it has just evaluated.
+        hess_fallback=hess if exact else (lambda x: energy.hessian_csc(x, project_contacts=True)),
+        shift_descents=EXACT_SHIFT_DESCENTS if exact else 0,
+        step_limit=_step_limit(wire.cavity_radius),
+        curvature_tol=STABILITY_TOL,
+        metric=node_lengths(wire),
+        zero_modes=(lambda x: _symmetry_modes(x, wire, energy.lam)) if free_rotation else None,
+        fixed=fixed,
+        barriers=_barriers(energy, wire) if anticipate_contacts else None,
+        # the stability test where the assembled H cannot resolve τ (N ~ 10⁵): the
+        # element-form product (crumple.energy_action); on unless ACCURATE_STABILITY is off
+        hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
+        retract=_curved_retraction(energy) if curved else None,
+        accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
+    )
 
 
 def resolve_fallback(fallback: str | None, wire: Wire) -> str:
