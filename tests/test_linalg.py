@@ -413,32 +413,6 @@ def test_refactorised_spring_step_is_the_minimiser_from_any_start(seed, n, m, lo
     assert ldl.analyses == 1  # every round reused the model's symbolic analysis
 
 
-@settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
-       logk=st.floats(0.0, 7.0), shift=st.booleans())  # fmt: skip
-def test_a_warm_first_active_set_finds_the_same_minimiser(seed, n, m, logk, shift):
-    """spring_step(first_active=mask): whatever the mask (the springs a step before ended with,
-    here random, all or none), the same minimiser as from the start alone, the model never
-    above its value at the start, and where the mask is the minimiser's own active set one
-    round."""
-    rng = np.random.default_rng(seed)
-    csc, diag, dense, g, index, value, offset, stiff, rows = _spring_problem(rng, n, m, logk, shift)
-    want = _spring_kkt_minimiser(dense, g, rows, offset, stiff)
-    start = rng.standard_normal(n)
-    q0 = _spring_model(dense, g, rows, offset, stiff, start)
-    exact = rows @ want < offset
-    for mask in (rng.random(m) < 0.5, np.ones(m, bool), np.zeros(m, bool), exact):
-        ldl = LDLT()
-        ldl.factorize(csc, shift=diag)
-        s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start,
-                                  first_active=mask)  # fmt: skip
-        assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))
-        assert ok, f"active set not found in {used} rounds from the mask {mask}"
-        np.testing.assert_allclose(s, want, rtol=1e-6, atol=1e-8 * (1 + np.abs(want).max()))
-        if mask is exact and np.array_equal(rows @ s < offset, exact):
-            assert used == 1
-
-
 def test_refactorised_spring_step_never_raises_the_model_when_stopped_early():
     """Stopped after 1, 2 or 3 rounds, before the active set is found, the point returned is
     no worse than the start: what Newton uses when the rounds run out. (A full step to each

@@ -713,24 +713,6 @@ def test_no_wire_of_at_most_a_thousand_segments_is_polished(monkeypatch):
     assert res.converged and "polish" not in res.message
 
 
-@pytest.mark.parametrize("n, warm", [(20, False), (1000, False), (1001, True)])
-def test_the_springs_step_starts_warm_above_a_thousand_segments_only(monkeypatch, n, warm):
-    """``newton(warm_springs=...)`` is on above ``relax.WARM_SPRINGS_ABOVE`` = 1000 segments
-    only (the reproduction's ramps, N ≤ 1000, keep their iterates), and every Newton pass of a
-    stage gets it."""
-    seen = []
-
-    def spy(fun, x0, **kw):
-        seen.append(kw["warm_springs"])
-        return saved(fun, x0, **kw)
-
-    saved = relax.newton
-    monkeypatch.setattr(relax, "newton", spy)
-    wire = Wire.from_continuum(**CONTINUUM, n_segments=n)
-    relax.minimize_wire(wire, initial_state(wire, seed=0), 1.0, maxiter=2)
-    assert seen and all(w is warm for w in seen)
-
-
 def _result(x, energy, max_force, converged, iterations, message):
     return MinimizeResult(x=x, energy=energy, max_force=max_force, iterations=iterations,
                           evaluations=iterations + 1, hessian_evaluations=iterations,

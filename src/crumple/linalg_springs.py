@@ -103,9 +103,7 @@ def _line_minimum(c0, c1, u, v, offset, stiff):
     return lo
 
 
-def spring_step(
-    ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30, first_active=None
-):
+def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30):
     """The minimiser of q (module docstring) by semismooth Newton from ``start``.
 
     ``ldl`` is the :class:`crumple.linalg.LDLT` that factorised A = ``a`` + diag(``shift``)
@@ -114,13 +112,6 @@ def spring_step(
     Returns ``(s, converged, rounds_used)``: converged when the active set was found, s then the
     exact minimiser up to round-off. Not converged, s is the best point met, with
     q(s) <= q(start); None when a spring's rows fall outside the pattern of ``a``.
-
-    ``first_active`` (a boolean mask over the springs, or None) is the first round's active set
-    instead of the springs ``start`` enters: a warm start, e.g. the springs the step before
-    ended with entered. The round still moves from ``start`` by the exact line search on q, so
-    q falls as without it; where its step does not descend, or its matrix has a negative pivot
-    (releasing springs), the rounds go on from ``start`` as without it. With positive springs
-    the minimiser is unique: the mask changes only the rounds that find it.
     """
     indptr, indices = a.indptr, a.indices
     data = np.ascontiguousarray(a.data, dtype=np.float64)
@@ -133,15 +124,12 @@ def spring_step(
     used = 0
     for used in range(1, rounds + 1):
         u = _rows_dot(index, value, s)
-        warm = used == 1 and first_active is not None
-        active = first_active if warm else u < offset
+        active = u < offset
         merged, ok = _with_springs(indptr, indices, data, index, value, stiff, active)
         if not ok:
             return None, False, used
         f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
         if f.negative:  # not with positive springs (A is); releasing ones can: no minimiser
-            if warm:
-                continue
             return s, False, used
         trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
         if np.array_equal(_rows_dot(index, value, trial) < offset, active):
@@ -151,8 +139,6 @@ def spring_step(
         t = _line_minimum(float(g @ d + s @ ad), float(d @ ad), u, _rows_dot(index, value, d),
                           offset, stiff)  # fmt: skip
         if t <= 0.0:
-            if warm:  # the warm set's step does not descend: the rounds from start instead
-                continue
             break
         s = s + t * d
     return s, False, used

@@ -84,7 +84,6 @@ def newton(
     shift_descents: int | None = None,
     accurate_steps: bool = False,
     patience: int | None = None,
-    warm_springs: bool = False,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -216,12 +215,6 @@ def newton(
         Stop, unconverged, once this many iterations have passed without the energy going
         below its lowest value by more than its resolution (:func:`resolution`): a pass that
         no longer makes progress (the polish of ``crumple.relax_polish``). None: no such stop.
-    warm_springs : bool
-        With ``barriers``: where the springs' step is refactorised per active set
-        (``crumple.linalg_springs.spring_step``), its first round takes the springs the step
-        before ended with entered, instead of those the solve with the factor left it with.
-        The step is the same minimiser where it is found; only its rounds change. Off by
-        default (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
 
     Returns
     -------
@@ -258,7 +251,6 @@ def newton(
     st.hess_action = hess_action
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     st.accurate_steps = bool(accurate_steps)
-    st.warm_springs = bool(warm_springs)
     if patience is not None:
         if int(patience) < 1:
             raise ValueError(f"patience must be >= 1, got {patience!r}")
@@ -495,7 +487,6 @@ class _State:
     descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
     accurate_steps: bool = False  # newton(accurate_steps=...)
-    warm_springs: bool = False  # newton(warm_springs=...)
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
     entered: np.ndarray | None = None  # the index rows of the springs that step entered
     pending: np.ndarray | None = None  # a refused point's step, for the next iteration

@@ -42,10 +42,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
     again with them, up to ``RELISTINGS`` listings in all. Every step kept is checked to be a
     descent direction (gᵀs < 0: the model's minimiser is one, because every r_i <= 0 makes the
     model zero at s = 0; a point the solve reached without the active set need not be). If
-    none is, p is kept. ``st.springs``: the rows of the step kept (None: p kept). With
-    :data:`WARM_START` the solve with the factor, and with ``st.warm_springs``
-    (``newton(warm_springs=True)``) the refactorised step, start from the springs the step
-    before ended with entered (``st.entered``), those of them listed again.
+    none is, p is kept. ``st.springs``: the rows of the step kept (None: p kept).
     """
     st.springs = None
     rows = barriers(st.x, p)
@@ -54,49 +51,43 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
         return p
     g = st.g.ravel()
     best = p
-    known = _warm_start(st.entered, rows) if WARM_START or st.warm_springs else None
-    start = known if WARM_START else None
-    first = known if st.warm_springs else None
+    start = _warm_start(st.entered, rows)
     entered = None
     for listing in range(RELISTINGS):
-        s, active = _spring_model_step(st, p, rows, ldl, start, first)
+        s, active = _spring_model_step(st, p, rows, ldl, start)
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
         st.springs = _masked(st, rows)
-        entered = rows[0][active] if active is not None else None
+        entered = rows[0][active] if WARM_START and active is not None else None
         if listing + 1 == RELISTINGS or _equal(best, p):  # p unchanged: same listing
             break
         before = len(rows[2])
         rows, grown = _merged_rows(rows, barriers(st.x, best))
         if not grown:
             break
-        if active is not None:
-            grown_mask = np.r_[active, np.zeros(len(rows[2]) - before, dtype=np.bool_)]
-            start = grown_mask if WARM_START else None
-            first = grown_mask if st.warm_springs else None
+        if WARM_START and active is not None:
+            start = np.r_[active, np.zeros(len(rows[2]) - before, dtype=np.bool_)]
     st.entered = entered
     return best
 
 
 def _warm_start(entered, rows):
     """The springs of ``rows`` that the last step kept entered (``entered``: their rows of
-    ``index``, or None), as a mask that starts a springs' solve; None where there are none."""
-    if entered is None or len(entered) == 0:
+    ``index``, or None), as the mask that starts the springs' solve (:data:`WARM_START`)."""
+    if not WARM_START or entered is None or len(entered) == 0:
         return None
     return ~new_rows(np.ascontiguousarray(entered, dtype=np.int64),
                      np.ascontiguousarray(rows[0], dtype=np.int64))  # fmt: skip
 
 
-def _spring_model_step(st, p, rows, ldl, start=None, first_active=None):
+def _spring_model_step(st, p, rows, ldl, start=None):
     """The springs' model step: one solve per spring that becomes active, no new factorisation
     (:meth:`crumple.linalg.Factorization.solve_springs`, its rounds started from the mask
     ``start`` where given); where that runs out of rounds (a step through a packed region),
     one factorisation of H plus the active springs per round
-    (:func:`crumple.linalg_springs.spring_step`, its first round's active set
-    ``first_active`` where given), its best point kept if the active set is still not
-    found. Returns (s, the mask of the springs s enters, None where no warm start keeps it);
-    (None, None): no step."""
+    (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
+    still not found. Returns (s, the mask of the springs s enters); (None, None): no step."""
     index, value, offset, stiff = _masked(st, rows)
     s, ok, active = st.factor.solve_springs(p, index, value, offset, stiff, start=start,
                                             return_active=True)  # fmt: skip
@@ -104,12 +95,8 @@ def _spring_model_step(st, p, rows, ldl, start=None, first_active=None):
         if st.model is None:
             return None, None
         first = s if all_finite(s) else p.ravel()
-        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, first,
-                              first_active=first_active)  # fmt: skip
-        keep = s is not None and (WARM_START or st.warm_springs)
-        active = _rows_dot(index, value, s) < offset if keep else None
-    elif not (WARM_START or st.warm_springs):
-        active = None
+        s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, first)
+        active = None if s is None or not WARM_START else _rows_dot(index, value, s) < offset
     return s, active
 
 

@@ -96,13 +96,6 @@ ACCURATE_STEPS_ABOVE = 1000
 #: the default N = 100 ramp took 3–10 % fewer iterations but ~50 % more CPU (seeds 0–2), and
 #: the reproduction keeps its iterates.
 RELEASE_ABOVE: int | None = 1000
-#: Above this many segments the springs' step, where it is refactorised per active set, starts
-#: from the springs the step before ended with (``newton(warm_springs=True)``). Measured
-#: (docs/performance.md, sixteenth stop): the N = 10⁴ default ramps (seeds 0, 1) 44/44 with
-#: ~30 % fewer of its rounds and 8–15 % less CPU, and N = 10⁵ stages 29–36 from the same
-#: checkpoint in less CPU, every one converged and stable. Like the other thresholds, it keeps
-#: every ramp of the reproduction and of the continuum study (N ≤ 1000) on its branches.
-WARM_SPRINGS_ABOVE = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -197,10 +190,8 @@ def minimize_wire(
     True
     """
     exact = resolve_fallback(fallback, wire) == "exact"
-    if method not in ("newton", "powell"):
-        raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
-    x0, fixed = _checked_start(wire, positions, fixed, method)
     energy = WireEnergy(wire, lam, rest_angles=rest_angles)
+    x0, fixed = _checked_start(wire, positions, fixed, method)
     radius = wire.cavity_radius
 
     def feasible(x):  # x: the minimiser's own finite (n_nodes, 2) array, checked no further
@@ -224,6 +215,8 @@ def minimize_wire(
             step=POWELL_STEP * wire.rest_length,
             reach=reach,
         )
+    if method != "newton":
+        raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
     kw = _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts)
     kw.update(ftol=ftol, maxiter=maxiter, max_step=max_step, feasible=feasible)
     res = newton(energy, x0, **kw)
@@ -282,7 +275,6 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
         retract=_curved_retraction(energy) if curved else None,
         accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
-        warm_springs=wire.n_segments > WARM_SPRINGS_ABOVE,
     )
 
 
