@@ -119,8 +119,8 @@ def _retry_due(first: MinimizeResult, res: MinimizeResult) -> bool:
 
 def _retried(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
     """Newton in the coordinates from ``x`` (the end point of a polish) with the first pass's
-    keywords ``kw`` and criteria, within ``POLISH_PATIENCE`` and what is left of the stage's
-    budget after ``cost``; None when nothing is left."""
+    keywords ``kw`` and criteria, stopped by the polish's patience (``POLISH_PATIENCE``) and
+    within what is left of the stage's budget after ``cost``; None when nothing is left."""
     left = int(kw.get("maxiter", 500)) - cost["iterations"]
     if left < 1:
         return None
