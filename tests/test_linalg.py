@@ -434,22 +434,46 @@ def test_refactorised_spring_step_never_raises_the_model_when_stopped_early():
             assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))
 
 
-def test_refactorised_spring_step_finishes_what_the_solves_ran_out_of_rounds_for():
-    """Identity model, p0 = (1, 1, 1, 1), four stiff springs the step enters one after the other:
-    one round of the solve per spring finds the first only; the refactorised step from there
-    finds all four in rounds that do not grow with their number."""
-    n = 4
+def _identity_springs(n, stop):
+    """The identity model in raw CSC, its LDLT, and stiff springs holding x_i <= stop[i]."""
     eye = sp.csc_matrix(np.eye(n))
     csc = CSC(eye.data.copy(), eye.indices, eye.indptr)
     ldl = LDLT()
     f = ldl.factorize(csc)
     index, value = np.arange(n)[:, None], -np.ones((n, 1))
-    offset, stiff = -np.array([0.1, 0.2, 0.3, 0.4]), np.full(n, 1e9)
+    return csc, ldl, f, index, value, -np.asarray(stop, dtype=np.float64), np.full(n, 1e9)
+
+
+def test_refactorised_spring_step_finishes_what_the_solves_ran_out_of_rounds_for():
+    """Identity model, p0 = (1, 1, 1, 1), four stiff springs the step enters one after the other:
+    one round of the solve per spring finds the first only. From the point it stopped at,
+    whose springs are the minimiser's, the refactorised step finds all four in one round; from
+    the segment's least point (the default) it adds them again, one a round (the price of
+    ``from_segment``, docs/performance.md)."""
+    n = 4
+    csc, ldl, f, index, value, offset, stiff = _identity_springs(n, [0.1, 0.2, 0.3, 0.4])
     s0, ok = f.solve_springs(np.ones(n), index, value, offset, stiff, rounds=1, max_new=1)
     assert not ok
-    s, ok, used = spring_step(ldl, csc, None, -np.ones(n), index, value, offset, stiff, s0)
-    assert ok and used <= 2
-    assert s == pytest.approx([0.1, 0.2, 0.3, 0.4], rel=1e-8)
+    for from_segment, rounds in ((False, 1), (True, n)):
+        s, ok, used = spring_step(ldl, csc, None, -np.ones(n), index, value, offset, stiff, s0,
+                                  from_segment=from_segment)  # fmt: skip
+        assert ok and used == rounds
+        assert s == pytest.approx([0.1, 0.2, 0.3, 0.4], rel=1e-8)
+
+
+def test_refactorised_spring_step_from_the_segment_sheds_what_the_start_overshot():
+    """Identity model, p0 = (1, 1, 1, 1), stiff springs at x_i <= 1.5 that the minimiser x = p0
+    does not touch, from a start x = 2 that goes into all of them (a step that ran past its
+    contacts): the least point of q on the segment from 0 to the start is x = 1 (q = -t·4·2 +
+    (2t)²·4/2 there, least at t = 1/2 before any spring), the minimiser, found in one round; from
+    the start itself the round is held by the four springs and a second one is needed."""
+    n = 4
+    csc, ldl, _, index, value, offset, stiff = _identity_springs(n, np.full(n, 1.5))
+    for from_segment, rounds in ((True, 1), (False, 2)):
+        s, ok, used = spring_step(ldl, csc, None, -np.ones(n), index, value, offset, stiff,
+                                  np.full(n, 2.0), from_segment=from_segment)  # fmt: skip
+        assert ok and used == rounds
+        assert s == pytest.approx(np.ones(n), rel=1e-12)
 
 
 @settings(max_examples=40, deadline=None)

@@ -838,15 +838,22 @@ def test_per_node_wire_coils_up_at_the_first_stage():
     assert r.stages[0].result.iterations < 1000
 
 
-def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypatch):
+@pytest.mark.parametrize("segment_above", [None, 0])
+def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypatch,
+                                                                       segment_above):  # fmt: skip
     """Where the one-solve-per-spring model runs out of rounds, Newton finishes the spring step
     with a factorisation per active set (crumple.linalg_springs). Forced to run out at once
     (one round), every contact step takes that path: most of those solves find the model's
     exact minimiser (converged), and the default wire still reaches every contact stage's
     equilibrium, stable, without crossing, at the same energy as the normal path to within
-    the force tolerance."""
+    the force tolerance. The same with the rounds started from the segment's least point
+    (``relax.SEGMENT_START_ABOVE`` = 0; by default not at 60 segments), which the step is
+    told exactly when the threshold says so."""
     import crumple.minimize_barriers as minimize_module
+    import crumple.relax as rx
     from crumple.linalg import Factorization
+
+    monkeypatch.setattr(rx, "SEGMENT_START_ABOVE", segment_above)
 
     wire, ramp, normal = _contact_ramp()
     calls = []
@@ -857,15 +864,19 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
 
     original = minimize_module.spring_step
 
+    told = set()
+
     def counted(*args, **kwargs):
         out = original(*args, **kwargs)
         calls.append(out[1])
+        told.add(kwargs["from_segment"])
         return out
 
     monkeypatch.setattr(Factorization, "solve_springs", one_round)
     monkeypatch.setattr(minimize_module, "spring_step", counted)
     forced = run_ramp(wire, ramp, seed=1)
     assert len(calls) > 10 and sum(calls) > 0.8 * len(calls)
+    assert told == {segment_above is not None}
     _assert_the_same_contact_equilibria(normal, forced)
 
 

@@ -103,7 +103,34 @@ def _line_minimum(c0, c1, u, v, offset, stiff):
     return lo
 
 
-def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30):
+@njit(cache=True)
+def _q_change(c0, c1, u, v, offset, stiff):
+    """q(s + d) - q(s), u = Uᵀs, v = Uᵀd, c0 = (g + As)ᵀd and c1 = dᵀAd (the smooth part's
+    slope and curvature along d)."""
+    out = c0 + 0.5 * c1
+    for i in range(u.shape[0]):
+        before = max(0.0, offset[i] - u[i])
+        after = max(0.0, offset[i] - u[i] - v[i])
+        out += 0.5 * stiff[i] * (after * after - before * before)
+    return out
+
+
+def _least_on_segment(s, a_mul, g, index, value, offset, stiff):
+    """The point t s, t in [0, 1], where q is least on the segment from 0 (the Newton iterate)
+    to ``s`` (:func:`_line_minimum`), or ``s`` itself where q is not strictly lower there (a
+    releasing spring can make q non-convex along the segment)."""
+    v = _rows_dot(index, value, s)
+    c0, c1 = float(g @ s), float(s @ a_mul(s))
+    zero = np.zeros_like(v)
+    t = _line_minimum(c0, c1, zero, v, offset, stiff)
+    if t >= 1.0:
+        return s
+    there = _q_change(t * c0, t * t * c1, zero, t * v, offset, stiff)
+    return t * s if there < _q_change(c0, c1, zero, v, offset, stiff) else s
+
+
+def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30,
+                from_segment=True):  # fmt: skip
     """The minimiser of q (module docstring) by semismooth Newton from ``start``.
 
     ``ldl`` is the :class:`crumple.linalg.LDLT` that factorised A = ``a`` + diag(``shift``)
@@ -112,6 +139,17 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
     Returns ``(s, converged, rounds_used)``: converged when the active set was found, s then the
     exact minimiser up to round-off. Not converged, s is the best point met, with
     q(s) <= q(start); None when a spring's rows fall outside the pattern of ``a``.
+
+    With ``from_segment`` (the default) the rounds start from the point of the segment from 0
+    to ``start`` where q is least, where q is lower there than at ``start``
+    (:func:`_least_on_segment`). The start a caller has is where the solve with the factor ran
+    out of rounds: the Newton step held by the few springs found by then, which goes deep into
+    most of the others. From there the rounds shed those springs a few at a time (their line
+    searches stop at the stiff springs' kinks); the segment's least point enters few of them.
+    The price is where the start's springs were the right ones: from the segment the rounds
+    then add them again, a few a round. Measured on the calls of contact stages replayed both
+    ways (``benchmarks/bench_springs.py``; docs/performance.md, "The refactorised springs'
+    step from the segment's least point").
     """
     indptr, indices = a.indptr, a.indices
     data = np.ascontiguousarray(a.data, dtype=np.float64)
@@ -121,6 +159,8 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
         return _csc_matvec(indptr, indices, data, v) + sh * v
 
     s = np.array(start, dtype=np.float64)
+    if from_segment:
+        s = _least_on_segment(s, a_mul, g, index, value, offset, stiff)
     used = 0
     for used in range(1, rounds + 1):
         u = _rows_dot(index, value, s)

@@ -83,6 +83,7 @@ def newton(
     retract: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None,
     shift_descents: int | None = None,
     accurate_steps: bool = False,
+    springs_from_segment: bool = False,
     patience: int | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
@@ -211,6 +212,12 @@ def newton(
         lists springs, the springs' step is refined by CG on the product instead
         (``minimize_krylov._accurate_spring_step``). Off by default
         (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
+    springs_from_segment : bool
+        Where the springs' solve with the factor runs out of rounds, the refactorised step
+        (``crumple.linalg_springs.spring_step``) starts from the least point of its model on
+        the segment from x to the point the solve reached, instead of that point
+        (``from_segment``). Off by default (``crumple.relax.minimize_wire`` turns it on above
+        10³ segments).
     patience : int, optional
         Stop, unconverged, once this many iterations have passed without the energy going
         below its lowest value by more than its resolution (:func:`resolution`): a pass that
@@ -251,6 +258,7 @@ def newton(
     st.hess_action = hess_action
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     st.accurate_steps = bool(accurate_steps)
+    st.springs_from_segment = bool(springs_from_segment)
     if patience is not None:
         if int(patience) < 1:
             raise ValueError(f"patience must be >= 1, got {patience!r}")
@@ -487,6 +495,7 @@ class _State:
     descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
     accurate_steps: bool = False  # newton(accurate_steps=...)
+    springs_from_segment: bool = False  # newton(springs_from_segment=...)
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
     entered: np.ndarray | None = None  # the index rows of the springs that step entered
     pending: np.ndarray | None = None  # a refused point's step, for the next iteration

@@ -96,6 +96,14 @@ ACCURATE_STEPS_ABOVE = 1000
 #: the default N = 100 ramp took 3–10 % fewer iterations but ~50 % more CPU (seeds 0–2), and
 #: the reproduction keeps its iterates.
 RELEASE_ABOVE: int | None = 1000
+#: Above this many segments (None: never) the refactorised springs' step starts from the least
+#: point of its model on the segment to the point where the solve with the factor ran out of
+#: rounds (``newton(springs_from_segment=True)``). Measured (docs/performance.md, "The
+#: refactorised springs' step from the segment's least point"): on 40 calls of an N = 10⁵
+#: contact stage replayed both ways, 318 rounds (factorisations) against 717; N = 10⁵ stage
+#: 29 in 204 s CPU against 364 s. Not below: the reproduction keeps its iterates (with it,
+#: its per-node runs move by round-off, ~10⁻⁹ relative).
+SEGMENT_START_ABOVE: int | None = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -275,6 +283,8 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
         retract=_curved_retraction(energy) if curved else None,
         accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
+        springs_from_segment=SEGMENT_START_ABOVE is not None
+        and wire.n_segments > SEGMENT_START_ABOVE,
     )
 
 
