@@ -1,0 +1,111 @@
+"""The refactorised springs' step replayed on the calls of one contact stage, each way.
+
+    python benchmarks/bench_springs.py N K DIR [every=2] [calls=40] [curved=on|off]
+
+re-minimises stage K (1-based) of the default schedule at N segments from the positions of
+stage K - 1 that ``bench_scale.py scale N save=DIR`` wrote, keeps the inputs of every
+``every``-th call of :func:`crumple.linalg_springs.spring_step` (at most ``calls`` of them),
+then solves each kept call again from its own start with ``from_segment`` off and on (the
+rounds started from the start as given, or from the least point of q on the segment from 0 to
+it). The stage's path sets which calls are met; the replay compares the two ways on the same
+calls: rounds (one factorisation each), minimisers found, q reached, CPU. Counts are
+deterministic; the CPU is this machine's.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+sys.path.insert(0, os.path.dirname(__file__))
+from bench_scale import continuum_wire
+
+from crumple import linalg_springs, minimize_barriers
+from crumple.linalg import CSC, LDLT, _csc_matvec
+from crumple.protocol import Ramp
+from crumple.relax import minimize_wire
+
+
+def kept_calls(n, k, save, every, limit, curved):
+    """Stage k from stage k - 1's positions; the inputs of every ``every``-th spring_step call."""
+    ramp = Ramp(curved_steps=curved)
+    x = np.load(os.path.join(save, f"N{n}_stage{k - 1:02d}.npy"))
+    kept, seen = [], [0]
+    step = minimize_barriers.spring_step
+
+    def keeping(ldl, a, shift, g, index, value, offset, stiff, start, **kw):
+        if seen[0] % every == 0 and len(kept) < limit:
+            kept.append(tuple(np.array(v, copy=True) if v is not None else None
+                              for v in (a.data, a.indices, a.indptr, shift, g, index, value,
+                                        offset, stiff, start)))  # fmt: skip
+        seen[0] += 1
+        return step(ldl, a, shift, g, index, value, offset, stiff, start, **kw)
+
+    minimize_barriers.spring_step = keeping
+    try:
+        t0 = time.process_time()
+        res = minimize_wire(continuum_wire(n), x, ramp.lambdas[k - 1], method="newton",
+                            ftol=ramp.ftol, maxiter=ramp.maxiter, max_step=ramp.max_step,
+                            curved_steps=ramp.curved_steps, fallback=ramp.fallback)  # fmt: skip
+    finally:
+        minimize_barriers.spring_step = step
+    print(f"== N = {n}, stage {k} (λ = {ramp.lambdas[k - 1]:.4g}) from {save}'s stage {k - 1}: "
+          f"{res.iterations} iterations, converged {res.converged}, "
+          f"{time.process_time() - t0:.1f} s CPU; {seen[0]} refactorised steps, "
+          f"{len(kept)} kept (every {every}) ==")  # fmt: skip
+    return kept
+
+
+def model_value(call, s):
+    """q(s) of a kept call."""
+    data, indices, indptr, shift, g, index, value, offset, stiff, _ = call
+    a_s = _csc_matvec(indptr, indices, data, s) + (0.0 if shift is None else shift * s)
+    gap = np.maximum(0.0, offset - linalg_springs._rows_dot(index, value, s))
+    return float(g @ s + 0.5 * s @ a_s + 0.5 * np.sum(stiff * gap**2))
+
+
+def replay(call, from_segment):
+    """One kept call solved again: (rounds, converged, q(s) - q(start), CPU s)."""
+    data, indices, indptr, shift, g, index, value, offset, stiff, start = call
+    ldl = LDLT()
+    t0 = time.process_time()
+    s, ok, used = linalg_springs.spring_step(ldl, CSC(data, indices, indptr), shift, g, index,
+                                             value, offset, stiff, start,
+                                             from_segment=from_segment)  # fmt: skip
+    t = time.process_time() - t0
+    dq = np.nan if s is None else model_value(call, s) - model_value(call, start)
+    return used, bool(ok), dq, t
+
+
+def main(argv):
+    flags = dict(a.split("=") for a in argv if "=" in a)
+    n, k, save = (v for v in argv if "=" not in v)
+    curved = {"on": True, "off": False, None: None}[flags.get("curved")]
+    with threadpool_limits(limits=1, user_api="blas"):
+        calls = kept_calls(int(n), int(k), save, int(flags.get("every", 2)),
+                           int(flags.get("calls", 40)), curved)  # fmt: skip
+        print("  call | springs | off: rounds, found, q - q(start) | on: rounds, found, "
+              "q - q(start)")  # fmt: skip
+        total = {False: [0, 0, 0.0, 0], True: [0, 0, 0.0, 0]}
+        for i, call in enumerate(calls):
+            got = {way: replay(call, way) for way in (False, True)}
+            low = min(got[w][2] for w in got)
+            for way, (used, ok, dq, t) in got.items():
+                c = total[way]
+                c[0], c[1], c[2] = c[0] + used, c[1] + ok, c[2] + t
+                c[3] += dq <= low + 1e-12 * max(1.0, abs(low))
+            print(
+                f"  {i} | {len(call[7])} | {got[False][0]}, {got[False][1]}, "
+                f"{got[False][2]:.3e} | {got[True][0]}, {got[True][1]}, {got[True][2]:.3e}"
+            )
+    for way, (rounds, found, t, lowest) in total.items():
+        print(f"  from_segment={way}: {rounds} rounds, active set found in {found}/{len(calls)}, "
+              f"q lowest (to 1e-12) in {lowest}, {t:.1f} s CPU")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
