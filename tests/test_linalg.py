@@ -3,6 +3,8 @@ the modified factorisation's descent property, and the reuse of the symbolic ana
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -10,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crumple.linalg import CSC, LDLT
-from crumple.linalg_springs import new_rows, spring_step
+from crumple.linalg_springs import _least_on_segment, _q_change, new_rows, spring_step
 
 
 def random_symmetric(rng, n, density, shift):
@@ -393,17 +395,20 @@ def _spring_model(dense, g, rows, offset, stiff, s):
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
-       logk=st.floats(0.0, 7.0), shift=st.booleans())  # fmt: skip
-def test_refactorised_spring_step_is_the_minimiser_from_any_start(seed, n, m, logk, shift):
+       logk=st.floats(0.0, 7.0), shift=st.booleans(), from_segment=st.booleans())  # fmt: skip
+def test_refactorised_spring_step_is_the_minimiser_from_any_start(seed, n, m, logk, shift,
+                                                                  from_segment):  # fmt: skip
     """linalg_springs.spring_step (one factorisation of A + Σ_S k a aᵀ per round) finds the
     same minimiser as enumerating the active sets, from a random start, and never raises the
-    model above its value at the start (monotone, so usable when it runs out of rounds)."""
+    model above its value at the start (monotone, so usable when it runs out of rounds); from
+    the start as given and from the segment's least point."""
     rng = np.random.default_rng(seed)
     csc, diag, dense, g, index, value, offset, stiff, rows = _spring_problem(rng, n, m, logk, shift)
     ldl = LDLT()
     ldl.factorize(csc, shift=diag)
     start = rng.standard_normal(n)
-    s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start)
+    s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start,
+                              from_segment=from_segment)  # fmt: skip
     assert s is not None
     q0 = _spring_model(dense, g, rows, offset, stiff, start)
     assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))
@@ -425,11 +430,11 @@ def test_refactorised_spring_step_never_raises_the_model_when_stopped_early():
         )
         start = rng.standard_normal(8)
         q0 = _spring_model(dense, g, rows, offset, stiff, start)
-        for rounds in (1, 2, 3):
+        for rounds, from_segment in itertools.product((1, 2, 3), (False, True)):
             ldl = LDLT()
             ldl.factorize(csc, shift=diag)
             s, _, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start,
-                                     rounds=rounds)  # fmt: skip
+                                     rounds=rounds, from_segment=from_segment)  # fmt: skip
             assert used <= rounds
             assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))
 
@@ -459,6 +464,57 @@ def test_refactorised_spring_step_finishes_what_the_solves_ran_out_of_rounds_for
                                   from_segment=from_segment)  # fmt: skip
         assert ok and used == rounds
         assert s == pytest.approx([0.1, 0.2, 0.3, 0.4], rel=1e-8)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 8), m=st.integers(1, 6),
+       released=st.booleans())  # fmt: skip
+def test_the_model_change_is_the_difference_of_the_model(seed, n, m, released):
+    """linalg_springs._q_change(c0, c1, u, v) = q(s + d) - q(s) for random s, d and springs,
+    some of them releasing (negative stiffness), against q evaluated densely."""
+    rng = np.random.default_rng(seed)
+    _, _, dense, g, _, _, offset, stiff, rows = _spring_problem(rng, n, m, 3.0)
+    if released:
+        stiff = stiff * rng.choice([-1.0, 1.0], m)
+    s, d = rng.standard_normal(n), rng.standard_normal(n)
+    want = _spring_model(dense, g, rows, offset, stiff, s + d)
+    want -= _spring_model(dense, g, rows, offset, stiff, s)
+    got = _q_change(float((g + dense @ s) @ d), float(d @ dense @ d), rows @ s, rows @ d, offset,
+                    stiff)  # fmt: skip
+    assert got == pytest.approx(want, rel=1e-9, abs=1e-9 * (1 + abs(want)))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 8), m=st.integers(1, 6),
+       logk=st.floats(0.0, 7.0), scale=st.floats(0.1, 10.0))  # fmt: skip
+def test_the_segment_start_is_the_least_point_of_the_segment(seed, n, m, logk, scale):
+    """With positive springs q is convex along the segment from 0 to the start, and
+    _least_on_segment gives its least point: no point of a 2001-point grid on the segment is
+    lower, and neither is the start."""
+    rng = np.random.default_rng(seed)
+    _, _, dense, g, index, value, offset, stiff, rows = _spring_problem(rng, n, m, logk)
+    s = scale * rng.standard_normal(n)
+    got = _least_on_segment(s, lambda v: dense @ v, g, index, value, offset, stiff)
+    q = _spring_model(dense, g, rows, offset, stiff, got)
+    grid = min(_spring_model(dense, g, rows, offset, stiff, t * s) for t in np.linspace(0, 1, 2001))
+    assert q <= min(grid, _spring_model(dense, g, rows, offset, stiff, s)) + 1e-9 * (1 + abs(q))
+
+
+def test_the_segment_start_is_kept_only_where_it_is_lower():
+    """One coordinate, A = 1, g = -1, a releasing spring (k = -10) beyond x = 1.5 and a stiff
+    one beyond x = 1.9, from x = 1.92: along the segment the search stops at the local minimum
+    x = 1 (q = -1/2), above q at the start (-0.7588; the least point, x ≈ 1.903, is beyond a
+    non-convex stretch the search does not see), so the start itself is returned."""
+    index, value = np.array([[0], [0]]), np.array([[-1.0], [-1.0]])
+    offset, stiff = np.array([-1.5, -1.9]), np.array([-10.0, 1e3])
+    g, s = np.array([-1.0]), np.array([1.92])
+    rows = np.array([[-1.0], [-1.0]])
+    q = [_spring_model(np.eye(1), g, rows, offset, stiff, np.array([x])) for x in (1.0, 1.92)]
+    assert q[0] == pytest.approx(-0.5) and q[1] == pytest.approx(-0.7588)
+    assert _least_on_segment(s, lambda v: v.copy(), g, index, value, offset, stiff) is s
+    # with the releasing spring made positive the segment is convex and its least point taken
+    t_s = _least_on_segment(s, lambda v: v.copy(), g, index, value, offset, np.abs(stiff))
+    assert t_s[0] == pytest.approx(1.0, abs=1e-12)
 
 
 def test_refactorised_spring_step_from_the_segment_sheds_what_the_start_overshot():

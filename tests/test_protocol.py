@@ -853,9 +853,8 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     import crumple.relax as rx
     from crumple.linalg import Factorization
 
+    wire, ramp, normal = _contact_ramp()  # the default: not from the segment at 60 segments
     monkeypatch.setattr(rx, "SEGMENT_START_ABOVE", segment_above)
-
-    wire, ramp, normal = _contact_ramp()
     calls = []
     smw = Factorization.solve_springs
 

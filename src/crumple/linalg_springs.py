@@ -117,8 +117,11 @@ def _q_change(c0, c1, u, v, offset, stiff):
 
 def _least_on_segment(s, a_mul, g, index, value, offset, stiff):
     """The point t s, t in [0, 1], where q is least on the segment from 0 (the Newton iterate)
-    to ``s`` (:func:`_line_minimum`), or ``s`` itself where q is not strictly lower there (a
-    releasing spring can make q non-convex along the segment)."""
+    to ``s`` (:func:`_line_minimum`), or ``s`` itself where q is not strictly lower there. With
+    positive springs q is convex along the segment and the point is its exact minimiser; a
+    releasing spring (negative stiffness) can make it non-convex, and the point found is then
+    a root of q' that need not be the least, which is why it is taken only where it is lower
+    than at ``s``."""
     v = _rows_dot(index, value, s)
     c0, c1 = float(g @ s), float(s @ a_mul(s))
     zero = np.zeros_like(v)

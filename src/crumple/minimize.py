@@ -215,9 +215,9 @@ def newton(
     springs_from_segment : bool
         Where the springs' solve with the factor runs out of rounds, the refactorised step
         (``crumple.linalg_springs.spring_step``) starts from the least point of its model on
-        the segment from x to the point the solve reached, instead of that point
-        (``from_segment``). Off by default (``crumple.relax.minimize_wire`` turns it on above
-        10³ segments).
+        the segment from x to the point the solve reached, where the model is lower there,
+        instead of that point (``from_segment``). Off by default
+        (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
     patience : int, optional
         Stop, unconverged, once this many iterations have passed without the energy going
         below its lowest value by more than its resolution (:func:`resolution`): a pass that

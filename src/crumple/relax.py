@@ -100,9 +100,10 @@ RELEASE_ABOVE: int | None = 1000
 #: point of its model on the segment to the point where the solve with the factor ran out of
 #: rounds (``newton(springs_from_segment=True)``). Measured (docs/performance.md, "The
 #: refactorised springs' step from the segment's least point"): on 40 calls of an N = 10⁵
-#: contact stage replayed both ways, 318 rounds (factorisations) against 717; N = 10⁵ stage
-#: 29 in 204 s CPU against 364 s. Not below: the reproduction keeps its iterates (with it,
-#: its per-node runs move by round-off, ~10⁻⁹ relative).
+#: contact stage replayed both ways (``benchmarks/bench_springs.py``), 255 rounds
+#: (factorisations) against 671; in N = 10⁵ stage 29 the step's rounds 661 against 4410 (18 s
+#: CPU against 119 s). Not below: the reproduction keeps its iterates (with it, its per-node
+#: runs move by round-off, ~10⁻⁹ relative).
 SEGMENT_START_ABOVE: int | None = 1000
 
 Method = Literal["newton", "powell"]
