@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,6 +43,7 @@ from .minimize_line import _line_search, resolution
 from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
 from .minimize_result import MinimizeResult, _validate_common, all_finite, max_force
+from .minimize_state import _State
 from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
@@ -461,46 +461,6 @@ def _along(st) -> str:
         return ""
     return (f", {st.accurate_escapes} along the accurate Hessian product's mode, the assembled "
             "one's having given no step down")  # fmt: skip
-
-
-@dataclass(slots=True)
-class _State:
-    """The iterate and the bookkeeping of :func:`newton`."""
-
-    x: np.ndarray
-    e: float
-    g: np.ndarray
-    fmax: float
-    radius: float = math.inf
-    it: int = 0
-    nfev: int = 1
-    nhev: int = 0
-    fres: float = 0.0
-    skip: int = 0
-    skip_left: int = 0
-    sigma: float = 0.0
-    mask: np.ndarray | None = None  # the fixed entries of x.ravel(); never moved
-    factor: object = None  # the factor the last direction was solved with
-    model: tuple | None = None  # (matrix, shift) it is the factor of; None: not known
-    zero_modes: Callable | None = None
-    hess_action: Callable | None = None  # the accurate H v, or None
-    exact: bool = True  # the last direction is the exact Hessian's Newton step
-    escapes: int = 0  # saddle escapes taken
-    accurate_escapes: int = 0  # of them, along the accurate mode (the assembled one's failed)
-    refusals: int = 0  # points the accurate product found stable that the decrease test refused
-    unstable: bool = False  # stopped at an equilibrium that is not a minimum
-    refine: bool = False  # forces below their resolution but a Newton step still pays: go on
-    refine_note: str = ""
-    curved: int = 0  # accepted steps that were the retracted (curved) point
-    descents: int = 0  # the fallback's σ search: divisions of σ at most (0: none)
-    krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
-    accurate_steps: bool = False  # newton(accurate_steps=...)
-    springs_from_segment: bool = False  # newton(springs_from_segment=...)
-    springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
-    entered: np.ndarray | None = None  # the index rows of the springs that step entered
-    pending: np.ndarray | None = None  # a refused point's step, for the next iteration
-    best: float | None = None  # the lowest energy by more than its resolution (``patience``)
-    best_it: int = 0  # the iteration that reached it
 
 
 def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
