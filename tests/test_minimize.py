@@ -1367,6 +1367,89 @@ def test_the_accurate_spring_step_keeps_the_factor_s_step_where_it_does_not_appl
     assert st.krylov == 0
 
 
+def test_a_listing_above_the_solve_limit_goes_straight_to_the_refactorised_step(monkeypatch):
+    """``springs_solve_limit``: a listing with more springs than the limit skips the solve with
+    the factor (never called) and gets the refactorised step's, the model's exact minimiser
+    here (one spring), started from the step it is given (``last``: the listing before's) or
+    from the Newton step. At or below the limit the solve decides, bit for bit as without it."""
+    import crumple.minimize_barriers as mb
+    from crumple.linalg import Factorization
+
+    st, ldl, _, springs, q = _spring_state()
+    p = -st.factor.solve(st.g)
+    index, value, offset, stiff = springs
+    a = np.zeros(q.size)
+    a[index[0]] = value[0]
+    model = st.model[0].toarray() + np.diag(st.model[1])
+    exact = np.linalg.solve(model + stiff[0] * np.outer(a, a), -st.g + stiff[0] * offset[0] * a)
+    starts, solves = [], []
+    step, solve = mb.spring_step, Factorization.solve_springs
+
+    def recorded(*args, **kwargs):
+        starts.append(np.array(args[8], copy=True))
+        return step(*args, **kwargs)
+
+    def counted(self, *args, **kwargs):
+        solves.append(1)
+        return solve(self, *args, **kwargs)
+
+    monkeypatch.setattr(mb, "spring_step", recorded)
+    monkeypatch.setattr(Factorization, "solve_springs", counted)
+    st.springs_solve_limit = 0
+    s, _ = mb._spring_model_step(st, p, springs, ldl)
+    assert not solves and np.array_equal(starts[-1], p.ravel())
+    np.testing.assert_allclose(s, exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
+    last = 0.5 * p
+    mb._spring_model_step(st, p, springs, ldl, None, last)
+    assert not solves and np.array_equal(starts[-1], last.ravel())
+    st.springs_solve_limit = 1  # one spring listed: not above the limit
+    s, _ = mb._spring_model_step(st, p, springs, ldl, None, last)
+    assert len(solves) == 1 and len(starts) == 2 and np.array_equal(s, q)
+
+
+def test_a_relisting_above_the_solve_limit_starts_from_the_listing_before_s_step(monkeypatch):
+    """With the solve skipped, a relisting (the step found enters a pair the first listing did
+    not have) starts its refactorised step from the step the listing before found, not from
+    the Newton step again; the step kept is the minimiser of the model with both."""
+    import crumple.minimize_barriers as mb
+
+    st, ldl, _, springs, _ = _spring_state()
+    st.springs_solve_limit = 0
+    p = -st.factor.solve(st.g)
+    second = (np.array([[1]]), np.array([[-1.0]]), np.array([-1e-3]), np.array([1e-2]))
+    both = tuple(np.concatenate([u, v]) for u, v in zip(springs, second, strict=True))
+    listings = []
+
+    def barriers(x, step):
+        listings.append(step)
+        return springs if len(listings) == 1 else both
+
+    starts, found = [], []
+    step = mb.spring_step
+
+    def recorded(*args, **kwargs):
+        starts.append(np.array(args[8], copy=True))
+        found.append(step(*args, **kwargs)[0])
+        return found[-1], True, 1
+
+    monkeypatch.setattr(mb, "spring_step", recorded)
+    s = mb._barrier_step(st, p, barriers, ldl)
+    assert len(starts) >= 2 and np.array_equal(starts[0], p.ravel())
+    assert np.array_equal(starts[1], found[0])
+    a = np.zeros((2, s.size))
+    a[0, 0] = a[1, 1] = -1.0
+    dense = st.model[0].toarray() + np.diag(st.model[1]) + 1e-2 * a.T @ a
+    exact = np.linalg.solve(dense, -st.g - 1e-5 * a.sum(axis=0))  # k r a_i, r = -10⁻³
+    assert np.all(a @ exact < -1e-3)  # the model's minimiser enters both springs
+    np.testing.assert_allclose(s.ravel(), exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
+
+
+def test_a_negative_springs_solve_limit_is_refused():
+    fun, _, x0, kw = _wrong_along_the_uniform_mode()
+    with pytest.raises(ValueError, match="springs_solve_limit"):
+        newton(fun, x0, springs_solve_limit=-1, **kw)
+
+
 def test_the_accurate_steps_reach_the_minimum_with_springs_listed(monkeypatch):
     """The chain that the factor's steps cannot bring to its minimum (test above), now with a
     caller's barrier listed at every step (a spring far away, never entered): the steps are

@@ -879,6 +879,38 @@ def test_contact_stages_converge_on_the_refactorised_spring_step_alone(monkeypat
     _assert_the_same_contact_equilibria(normal, forced)
 
 
+def test_contact_stages_converge_with_the_springs_solve_skipped(monkeypatch):
+    """Above ``relax.SOLVE_LIMIT_ABOVE`` segments a listing of more than
+    ``relax.SPRINGS_SOLVE_LIMIT`` springs skips the solve with the factor. Both set to 0 (by
+    default not at 60 segments), every contact step is the refactorised step's, the solve is
+    never called, and the default wire reaches the same contact equilibria, stable, without
+    crossing."""
+    import crumple.minimize_barriers as minimize_module
+    import crumple.relax as rx
+    from crumple.linalg import Factorization
+
+    wire, ramp, normal = _contact_ramp()
+    monkeypatch.setattr(rx, "SOLVE_LIMIT_ABOVE", 0)
+    monkeypatch.setattr(rx, "SPRINGS_SOLVE_LIMIT", 0)
+    solves, calls = [], []
+    smw, original = Factorization.solve_springs, minimize_module.spring_step
+
+    def counted_solve(self, *args, **kwargs):
+        solves.append(1)
+        return smw(self, *args, **kwargs)
+
+    def counted(*args, **kwargs):
+        out = original(*args, **kwargs)
+        calls.append(out[1])
+        return out
+
+    monkeypatch.setattr(Factorization, "solve_springs", counted_solve)
+    monkeypatch.setattr(minimize_module, "spring_step", counted)
+    skipped = run_ramp(wire, ramp, seed=1)
+    assert not solves and len(calls) > 10 and sum(calls) > 0.8 * len(calls)
+    _assert_the_same_contact_equilibria(normal, skipped)
+
+
 def _contact_ramp():
     """A short ramp of the default wire (N = 60, seed 1) into contact: wire, ramp, result."""
     wire = Wire(k_b=5, k_s=5e5, n_segments=60)

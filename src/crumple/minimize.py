@@ -84,6 +84,7 @@ def newton(
     shift_descents: int | None = None,
     accurate_steps: bool = False,
     springs_from_segment: bool = False,
+    springs_solve_limit: int | None = None,
     patience: int | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
@@ -218,6 +219,12 @@ def newton(
         the segment from x to the point the solve reached, where the model is lower there,
         instead of that point (``from_segment``). Off by default
         (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
+    springs_solve_limit : int, optional
+        Where more springs than this are listed, the springs' step skips the solve with the
+        factor (one solve per spring that joins, two joining a round: it runs out of rounds
+        when hundreds join) and is the refactorised step at once, a relisting's started from
+        the step of the listing before. None (the default): always the solve first
+        (``crumple.relax.minimize_wire`` sets it above 10³ segments).
     patience : int, optional
         Stop, unconverged, once this many iterations have passed without the energy going
         below its lowest value by more than its resolution (:func:`resolution`): a pass that
@@ -259,6 +266,9 @@ def newton(
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     st.accurate_steps = bool(accurate_steps)
     st.springs_from_segment = bool(springs_from_segment)
+    if springs_solve_limit is not None and int(springs_solve_limit) < 0:
+        raise ValueError(f"springs_solve_limit must be >= 0 or None, got {springs_solve_limit!r}")
+    st.springs_solve_limit = None if springs_solve_limit is None else int(springs_solve_limit)
     if patience is not None:
         if int(patience) < 1:
             raise ValueError(f"patience must be >= 1, got {patience!r}")

@@ -7,8 +7,9 @@ model taken outside it: the Newton step runs into it and is cut by the caller's
 one-sided springs the model adds (k_i/2 max(0, r_i - a_iᵀs)², the barrier's curvature at its
 edge); the step is then the minimiser of that convex piecewise quadratic, found with the factor
 the Newton direction was solved with (:meth:`crumple.linalg.Factorization.solve_springs`) or,
-where that runs out of rounds, a factorisation per active set
-(:func:`crumple.linalg_springs.spring_step`). The energy is unchanged: only the step is.
+where that runs out of rounds or the caller's limit says it would (``st.springs_solve_limit``),
+a factorisation per active set (:func:`crumple.linalg_springs.spring_step`). The energy is
+unchanged: only the step is.
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ def _barrier_step(st, p, barriers, ldl) -> np.ndarray:
     start = _warm_start(st.entered, rows)
     entered = None
     for listing in range(RELISTINGS):
-        s, active = _spring_model_step(st, p, rows, ldl, start)
+        s, active = _spring_model_step(st, p, rows, ldl, start, best)
         if s is None or not float(np.dot(g, s)) < 0.0:
             break
         best = s.reshape(p.shape)
@@ -81,16 +82,22 @@ def _warm_start(entered, rows):
                      np.ascontiguousarray(rows[0], dtype=np.int64))  # fmt: skip
 
 
-def _spring_model_step(st, p, rows, ldl, start=None):
+def _spring_model_step(st, p, rows, ldl, start=None, last=None):
     """The springs' model step: one solve per spring that becomes active, no new factorisation
     (:meth:`crumple.linalg.Factorization.solve_springs`, its rounds started from the mask
     ``start`` where given); where that runs out of rounds (a step through a packed region),
     one factorisation of H plus the active springs per round
     (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
-    still not found. Returns (s, the mask of the springs s enters); (None, None): no step."""
+    still not found. Where more springs are listed than ``st.springs_solve_limit``, the
+    factorisations at once, from ``last`` (the step of the listing before; p at the first).
+    Returns (s, the mask of the springs s enters); (None, None): no step."""
     index, value, offset, stiff = _masked(st, rows)
-    s, ok, active = st.factor.solve_springs(p, index, value, offset, stiff, start=start,
-                                            return_active=True)  # fmt: skip
+    limit = st.springs_solve_limit
+    if st.model is not None and limit is not None and len(offset) > limit:
+        s, ok = (p if last is None else last).ravel(), False
+    else:
+        s, ok, active = st.factor.solve_springs(p, index, value, offset, stiff, start=start,
+                                                return_active=True)  # fmt: skip
     if not ok:
         if st.model is None:
             return None, None

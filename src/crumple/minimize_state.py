@@ -47,6 +47,7 @@ class _State:
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
     accurate_steps: bool = False  # newton(accurate_steps=...)
     springs_from_segment: bool = False  # newton(springs_from_segment=...)
+    springs_solve_limit: int | None = None  # newton(springs_solve_limit=...)
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
     entered: np.ndarray | None = None  # the index rows of the springs that step entered
     pending: np.ndarray | None = None  # a refused point's step, for the next iteration

@@ -105,6 +105,16 @@ RELEASE_ABOVE: int | None = 1000
 #: CPU against 119 s). Not below: the reproduction keeps its iterates (with it, its per-node
 #: runs move by round-off, ~10⁻⁹ relative).
 SEGMENT_START_ABOVE: int | None = 1000
+#: Above this many segments (None: never) a springs' step that lists more than
+#: ``SPRINGS_SOLVE_LIMIT`` springs skips the solve with the factor and is the refactorised step
+#: at once, a relisting's started from the listing before's step
+#: (``newton(springs_solve_limit=...)``). Why: at N = 10⁵ the listings run to thousands of
+#: springs, the solve (two joining a round, one solve each) ran out of rounds in most of
+#: them and took as much CPU as the refactorised step that then finished the job. Measured in
+#: docs/performance.md, "Straight to the refactorised springs' step". Not below: the
+#: reproduction keeps its iterates.
+SOLVE_LIMIT_ABOVE: int | None = 1000
+SPRINGS_SOLVE_LIMIT = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -284,9 +294,14 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         hess_action=energy.hessian_action if ACCURATE_STABILITY else None,
         retract=_curved_retraction(energy) if curved else None,
         accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
-        springs_from_segment=SEGMENT_START_ABOVE is not None
-        and wire.n_segments > SEGMENT_START_ABOVE,
+        springs_from_segment=_above(wire, SEGMENT_START_ABOVE),
+        springs_solve_limit=SPRINGS_SOLVE_LIMIT if _above(wire, SOLVE_LIMIT_ABOVE) else None,
     )
+
+
+def _above(wire: Wire, threshold: int | None) -> bool:
+    """Whether ``wire`` has more segments than ``threshold`` (None: never)."""
+    return threshold is not None and wire.n_segments > threshold
 
 
 def resolve_fallback(fallback: str | None, wire: Wire) -> str:
@@ -308,7 +323,7 @@ def resolve_fallback(fallback: str | None, wire: Wire) -> str:
 def _barriers(energy, wire):
     """The contact springs of the Newton model (:meth:`WireEnergy.barriers`), releasing above
     :data:`RELEASE_ABOVE` segments."""
-    if RELEASE_ABOVE is not None and wire.n_segments > RELEASE_ABOVE:
+    if _above(wire, RELEASE_ABOVE):
         return lambda x, step: energy.barriers(x, step, releasing=True)
     return energy.barriers
 
