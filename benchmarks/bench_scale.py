@@ -3,7 +3,8 @@
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
     python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
     python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off] [save=DIR]  # table
-    python benchmarks/bench_scale.py stage N K DIR [curved=on|off]  # stage K from DIR's K - 1
+    python benchmarks/bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2]  # stages
+                                                     # K … K2 in sequence from DIR's K - 1
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
@@ -23,6 +24,7 @@ Results are recorded in docs/performance.md.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import resource
 import sys
@@ -224,20 +226,50 @@ def bench_scale(ns, seed=0, curved=None, save=None):
               f"{pairs}", flush=True)  # fmt: skip
 
 
-def bench_stage(n: int, k: int, save: str, curved=None):
-    """Stage ``k`` (1-based) of the default schedule at N = ``n``, re-minimised from the
-    positions of stage k - 1 that ``scale … save=DIR`` wrote (the ramp adds no noise between
-    stages by default, so this is the ramp's own stage k from that start): its iterations,
-    passes, CPU, and the springs' solves (with the factor, and refactorised) with their CPU
-    and how many found their active set."""
-    from crumple import linalg, minimize_barriers
+def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None):
+    """Stages ``first`` … ``last`` (1-based) of the default schedule at N = ``n``, in sequence,
+    the first re-minimised from the positions of stage first - 1 that ``scale … save=DIR``
+    wrote (the ramp adds no noise between stages by default, so a single stage is the ramp's
+    own stage from that start), each next one from the last's minimum: per stage its
+    iterations, passes, CPU, and the springs' solves (with the factor, and refactorised) with
+    their CPU and how many found their active set. ``out``: a folder for each stage's
+    positions (None: none)."""
     from crumple.relax import minimize_wire
 
     ramp = Ramp(curved_steps=curved)
-    if not 2 <= k <= len(ramp.lambdas):
-        raise SystemExit(f"stage must be 2 … {len(ramp.lambdas)}, got {k}")
-    x = np.load(os.path.join(save, f"N{n}_stage{k - 1:02d}.npy"))
-    lam = ramp.lambdas[k - 1]
+    if not 2 <= first <= last <= len(ramp.lambdas):
+        raise SystemExit(f"stages must be 2 … {len(ramp.lambdas)}, got {first} … {last}")
+    x = np.load(os.path.join(save, f"N{n}_stage{first - 1:02d}.npy"))
+    print(f"== N = {n}, stages {first} … {last} from {save}'s stage {first - 1}, curved steps "
+          f"{'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
+    wire, total = continuum_wire(n), 0.0
+    for k in range(first, last + 1):
+        lam = ramp.lambdas[k - 1]
+        with _springs_counted() as counts, threadpool_limits(limits=1, user_api="blas"):
+            res, t = cpu(lambda x=x, lam=lam: minimize_wire(
+                wire, x, lam, method="newton", ftol=ramp.ftol, maxiter=ramp.maxiter,
+                max_step=ramp.max_step, curved_steps=ramp.curved_steps,
+                fallback=ramp.fallback))  # fmt: skip
+        x, total = res.x.reshape(x.shape), total + t
+        if out is not None:
+            os.makedirs(out, exist_ok=True)
+            np.save(os.path.join(out, f"N{n}_stage{k:02d}.npy"), x)
+        print(f"  stage {k} (λ = {lam:.4g}): {res.iterations} iterations"
+              f"{_passes(res.message)}, converged {res.converged}, max force "
+              f"{res.max_force:.3g}, energy {res.energy:.12g}, {t:.1f} s CPU ({total:.0f} s "
+              "in all)")  # fmt: skip
+        for key, (calls, found, secs) in counts.items():
+            print(f"    springs' solves {key}: {calls}, active set found in {found}, "
+                  f"{secs:.1f} s CPU")  # fmt: skip
+        print(f"    {res.message}", flush=True)
+
+
+@contextlib.contextmanager
+def _springs_counted():
+    """The springs' solves (with the factor, refactorised) counted while inside: calls, active
+    sets found, CPU."""
+    from crumple import linalg, minimize_barriers
+
     counts = {"with the factor": [0, 0, 0.0], "refactorised": [0, 0, 0.0]}
 
     def counted(fn, key):
@@ -254,20 +286,9 @@ def bench_stage(n: int, k: int, save: str, curved=None):
     linalg.Factorization.solve_springs = counted(saved[0], "with the factor")
     minimize_barriers.spring_step = counted(saved[1], "refactorised")
     try:
-        with threadpool_limits(limits=1, user_api="blas"):
-            res, t = cpu(lambda: minimize_wire(
-                continuum_wire(n), x, lam, method="newton", ftol=ramp.ftol,
-                maxiter=ramp.maxiter, max_step=ramp.max_step, curved_steps=ramp.curved_steps,
-                fallback=ramp.fallback))  # fmt: skip
+        yield counts
     finally:
         linalg.Factorization.solve_springs, minimize_barriers.spring_step = saved
-    print(f"== N = {n}, stage {k} (λ = {lam:.4g}) from {save}'s stage {k - 1}, curved steps "
-          f"{'on' if ramp.curved_steps else 'off'} ==\n  {res.iterations} iterations"
-          f"{_passes(res.message)}, converged {res.converged}, max force {res.max_force:.3g}, "
-          f"energy {res.energy:.12g}, {t:.1f} s CPU")  # fmt: skip
-    for key, (calls, found, secs) in counts.items():
-        print(f"  springs' solves {key}: {calls}, active set found in {found}, {secs:.1f} s CPU")
-    print(f"  {res.message}")
 
 
 def bench_bits():
@@ -652,12 +673,14 @@ if __name__ == "__main__":
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
         bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags), flags.get("save"))
-    elif what == "stage":  # stage N K DIR [curved=on|off]
+    elif what == "stage":  # stage N K[-K2] DIR [curved=on|off] [save=DIR2]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         args = [v for v in sys.argv[2:] if "=" not in v]
         if len(args) != 3:
-            raise SystemExit("usage: bench_scale.py stage N K DIR [curved=on|off]")
-        bench_stage(int(args[0]), int(args[1]), args[2], _curved_flag(flags))
+            raise SystemExit("usage: bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2]")
+        first, _, last = args[1].partition("-")
+        bench_stage(int(args[0]), int(first), int(last or first), args[2], _curved_flag(flags),
+                    flags.get("save"))  # fmt: skip
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]
