@@ -911,6 +911,21 @@ def test_contact_stages_converge_with_the_springs_solve_skipped(monkeypatch):
     _assert_the_same_contact_equilibria(normal, skipped)
 
 
+@pytest.mark.parametrize("n_segments", [1000, 1001])
+def test_the_large_wire_options_start_above_a_thousand_segments(n_segments):
+    """The options relax gives Newton above 10³ segments (accurate steps, the segment's start
+    and the skipped solve of the springs' step), and not at 10³: the reproduction and the
+    continuum study (N ≤ 1000) keep their iterates."""
+    import crumple.relax as rx
+    from crumple.energy import WireEnergy
+
+    wire = Wire.from_continuum(bending=0.05, stretching=5000, n_segments=n_segments)
+    kw = rx._newton_options(wire, WireEnergy(wire, 1.0), None, True, False, True)
+    large = n_segments > 1000
+    assert kw["accurate_steps"] is large and kw["springs_from_segment"] is large
+    assert kw["springs_solve_limit"] == (rx.SPRINGS_SOLVE_LIMIT if large else None)
+
+
 def _contact_ramp():
     """A short ramp of the default wire (N = 60, seed 1) into contact: wire, ramp, result."""
     wire = Wire(k_b=5, k_s=5e5, n_segments=60)

@@ -88,8 +88,9 @@ def _spring_model_step(st, p, rows, ldl, start=None, last=None):
     ``start`` where given); where that runs out of rounds (a step through a packed region),
     one factorisation of H plus the active springs per round
     (:func:`crumple.linalg_springs.spring_step`), its best point kept if the active set is
-    still not found. Where more springs are listed than ``st.springs_solve_limit``, the
-    factorisations at once, from ``last`` (the step of the listing before; p at the first).
+    still not found. Where more springs are listed than ``st.springs_solve_limit`` and the
+    factored model is known (``st.model``), the factorisations at once, from ``last`` (the step
+    of the listing before; p at the first).
     Returns (s, the mask of the springs s enters); (None, None): no step."""
     index, value, offset, stiff = _masked(st, rows)
     limit = st.springs_solve_limit
