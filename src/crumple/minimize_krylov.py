@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .linalg import CSC
-from .linalg_springs import _rows_dot, _spring_rhs, _with_springs
+from .linalg_springs import _line_minimum, _q_change, _rows_dot, _spring_rhs, _with_springs
 from .minimize_accurate import _assembly_resolution, _complement
 from .minimize_modes import _modes
 from .minimize_result import max_force
@@ -40,6 +40,16 @@ ACCURATE_STEPS = True
 #: steps apply (:func:`_accurate_spring_step`). False: the factor's spring step everywhere (the
 #: engine before the twelfth stop).
 ACCURATE_SPRING_STEPS = True
+#: Where the refined springs' step is not lower than q in the model of every listed spring
+#: (it entered a spring q had not), take the least point of that model on the segment from q
+#: to it instead of q; and where the CG met negative curvature, go on along it to the trust
+#: radius first (:func:`_accurate_spring_step`). Why: at N = 10⁵ the refinement was thrown
+#: away in most steps of a snap-through (the steps were then q, the factor's springs' step,
+#: damped by a shift σM set by the assembled H's round-off). Measured (docs/performance.md,
+#: "The accurate springs' step on its way"): N = 10⁵, λ = 234.4 from the ramp's λ = 200,
+#: 433 iterations and 390 s CPU against 799 and 706 s; the N = 10⁴ default ramps 7-9 % fewer
+#: contact iterations. False: q kept (the engine before the nineteenth stop).
+ACCURATE_SPRING_SEGMENT = True
 #: Conjugate-gradient iterations per step at most (measured at N = 5 × 10⁴: 2–3 on average).
 ACCURATE_STEP_MAXITER = 50
 #: The solve has converged when the residual's largest row, the force the quadratic model
@@ -99,9 +109,14 @@ def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
     factorisation), in the complement of the zero modes (the springs' rows are orthogonal to
     the rigid motions). Where q's residual in that model already passes the solve's test, q
     is kept without a factorisation. The CG stops at the trust radius or at negative
-    curvature, keeping its last iterate. The refined step is kept only if it is a descent
-    direction and lowers the piecewise model of every listed spring, evaluated with the
-    accurate product, below q's (docs/performance.md, "Accurate steps with contacts")."""
+    curvature, keeping its last iterate; at negative curvature (with
+    :data:`ACCURATE_SPRING_SEGMENT`) it goes on along that direction to the trust radius. The
+    refined step s is kept if it is a descent direction and lowers the piecewise model of
+    every listed spring, evaluated with the accurate product, below q's (docs/performance.md,
+    "Accurate steps with contacts"). Where it does not (s entered a listed spring that q did
+    not, and the model holds only q's), the step is the least point of that model on the
+    segment from q to s (:func:`_least_between`), with :data:`ACCURATE_SPRING_SEGMENT`, or q
+    without it."""
     if not (ACCURATE_SPRING_STEPS and _applies(st, m, floor)):
         return q
     index, value, offset, stiff = springs
@@ -121,12 +136,42 @@ def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
     f = _held_factor(st, ldl, springs, active)
     if f is None:
         return q
-    s, _, _, why = _cg(st, lambda v: _product(st, v) + held(v), f, project, qf, r, q.shape)
-    if why == "none" or not np.all(np.isfinite(s)) or not float(g @ s) < 0.0:
+    s, d, _, why = _cg(st, lambda v: _product(st, v) + held(v), f, project, qf, r, q.shape)
+    if why == "none" or not np.all(np.isfinite(s)):
         return q
+    if why == "negative" and ACCURATE_SPRING_SEGMENT and np.isfinite(st.radius):  # on along d
+        s = s + (st.radius / _rows(d, q.shape)) * d
+    hs = _product(st, s)
     before = _spring_model(g, qf, hq, index, value, offset, stiff)
-    after = _spring_model(g, s, _product(st, s), index, value, offset, stiff)
-    return s.reshape(q.shape) if after < before else q
+    after = _spring_model(g, s, hs, index, value, offset, stiff)
+    if after < before and float(g @ s) < 0.0:
+        return s.reshape(q.shape)
+    if not ACCURATE_SPRING_SEGMENT:
+        return q
+    s = _least_between(g, qf, hq, s, hs, index, value, offset, stiff)
+    if s is None or not float(g @ s) < 0.0:
+        return q
+    return s.reshape(q.shape)
+
+
+def _least_between(g, q, hq, s, hs, index, value, offset, stiff):
+    """The point of the segment from q to s where the piecewise model of every listed spring
+    is least (H by the accurate products ``hq`` = Hq and ``hs`` = Hs, so that Hd = hs - hq
+    costs no product), or None where it is not strictly lower there than at q.
+
+    Along the segment the model is g·(q + td) + ½ (q + td)ᵀH(q + td) + the springs' terms: its
+    slope is piecewise linear in t (:func:`crumple.linalg_springs._line_minimum`), exact for
+    positive springs; with a releasing spring or dᵀHd < 0 the root found need not be the
+    least point, which is why the change at it is checked."""
+    d = s - q
+    u, v = _rows_dot(index, value, q), _rows_dot(index, value, d)
+    hd = hs - hq
+    c0, c1 = float((g + hq) @ d), float(d @ hd)
+    t = _line_minimum(c0, c1, u, v, offset, stiff)
+    if not t > 0.0:
+        return None
+    change = _q_change(t * c0, t * t * c1, u, t * v, offset, stiff)
+    return q + t * d if change < 0.0 else None
 
 
 def _held_factor(st, ldl, springs, active):
