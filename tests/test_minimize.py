@@ -1385,13 +1385,15 @@ def test_the_least_point_between_two_steps_is_the_piecewise_model_s_least_on_the
     b = rng.normal(size=(4, 4))
     h = b @ b.T + 4 * np.eye(4)
     g = rng.normal(size=4)
-    q = np.zeros(4)
-    s = -2.0 * np.linalg.solve(h, g)  # twice the Newton step: the smooth least point is t = ½
-    j = int(np.argmax(np.abs(s)))
-    sign = np.sign(s[j])
-    stiff_spring = (np.array([[j]]), np.array([[-sign]]), np.array([-0.25 * abs(s[j])]),
-                    np.array([1e6]))  # fmt: skip  # holds |x_j| below a quarter of |s_j|
-    loose = (np.array([[j]]), np.array([[-sign]]), np.array([-10.0 * abs(s[j])]), np.array([1e6]))
+    q = 0.1 * rng.normal(size=4)  # not 0: Hq enters the slope and, through Hd = Hs - Hq, the
+    d = -2.0 * np.linalg.solve(h, g + h @ q)  # curvature; twice the Newton step from q, so
+    s = q + d  # the smooth least point is t = ½
+    j = int(np.argmax(np.abs(d)))
+    sign = np.sign(d[j])
+    stiff_spring = (np.array([[j]]), np.array([[-sign]]), np.array([-sign * q[j] - 0.25 *
+                    abs(d[j])]), np.array([1e6]))  # fmt: skip  # a quarter of the way along d
+    loose = (np.array([[j]]), np.array([[-sign]]), np.array([-sign * q[j] - 10.0 * abs(d[j])]),
+             np.array([1e6]))  # fmt: skip
     grid = np.linspace(0.0, 1.0, 20001)
     for springs, smooth in ((stiff_spring, False), (loose, True)):
         x = _least_between(g, q, h @ q, s, h @ s, *springs)
@@ -1444,6 +1446,34 @@ def test_the_accurate_spring_step_stops_on_its_way_where_a_listed_spring_holds_i
     np.testing.assert_allclose(s, q + t * move, atol=1e-9 * np.abs(move).max())
     assert 0.4 < t <= 0.5 + 1e-6  # at the kink, where the spring holds it
     assert _piecewise_model(h, g, held, s.ravel()) < before and float(g @ s.ravel()) < 0
+
+
+def test_the_accurate_spring_step_goes_on_along_negative_curvature_by_the_radius(monkeypatch):
+    """Where the accurate H (here the fixture's less one along its uniform mode: lowest
+    eigenvalue -1) has negative curvature along the CG's first direction d, the CG stops
+    there with nothing but q: without ``ACCURATE_SPRING_SEGMENT`` q is kept; with it the step
+    is q + (Δ/|d|∞) d, a largest row displacement of the trust radius Δ from q, a descent
+    direction that lowers the springs' model below q's."""
+    import crumple.minimize_krylov as mk
+
+    st, ldl, h, springs, q = _spring_state(radius=1.0)
+    w = np.full(q.size, 1.0 / np.sqrt(q.size))
+    negative = h - np.outer(w, w)
+    assert np.linalg.eigvalsh(negative).min() < -0.9
+    st.hess_action = lambda x, v: negative @ v
+    m = np.full(q.size, 1e-9)
+    stops = []
+    cg = mk._cg
+    monkeypatch.setattr(mk, "_cg", lambda *a: stops.append(cg(*a)[2:]) or cg(*a))
+    monkeypatch.setattr(mk, "ACCURATE_SPRING_SEGMENT", False)
+    assert mk._accurate_spring_step(st, q, springs, ldl, m, 1e-3 * m) is q
+    assert stops[-1] == (0, "negative")
+    monkeypatch.setattr(mk, "ACCURATE_SPRING_SEGMENT", True)
+    s = mk._accurate_spring_step(st, q, springs, ldl, m, 1e-3 * m)
+    g = st.g.ravel()
+    assert np.abs(s - q).max() == pytest.approx(st.radius, rel=1e-12)
+    model = lambda x: _piecewise_model(negative, g, springs, x.ravel())  # noqa: E731
+    assert model(s) < model(q) and float(g @ s.ravel()) < 0
 
 
 def test_a_listing_above_the_solve_limit_goes_straight_to_the_refactorised_step(monkeypatch):

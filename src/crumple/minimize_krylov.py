@@ -42,13 +42,15 @@ ACCURATE_STEPS = True
 ACCURATE_SPRING_STEPS = True
 #: Where the refined springs' step is not lower than q in the model of every listed spring
 #: (it entered a spring q had not), take the least point of that model on the segment from q
-#: to it instead of q; and where the CG met negative curvature, go on along it to the trust
-#: radius first (:func:`_accurate_spring_step`). Why: at N = 10⁵ the refinement was thrown
-#: away in most steps of a snap-through (the steps were then q, the factor's springs' step,
-#: damped by a shift σM set by the assembled H's round-off). Measured (docs/performance.md,
-#: "The accurate springs' step on its way"): N = 10⁵, λ = 234.4 from the ramp's λ = 200,
-#: 433 iterations and 390 s CPU against 799 and 706 s; the N = 10⁴ default ramps 7-9 % fewer
-#: contact iterations. False: q kept (the engine before the nineteenth stop).
+#: to it instead of q; and where the CG met negative curvature, try first a step on along it
+#: by the trust radius's length (:func:`_accurate_spring_step`). Why: at N = 10⁵ the
+#: refinement was thrown away in most steps of a snap-through (the steps were then q, the
+#: factor's springs' step, damped by a shift σM set by the assembled H's round-off).
+#: Measured (docs/performance.md, "The accurate springs' step on its way"): N = 10⁵,
+#: λ = 234.4 from the ramp's λ = 200, converged in 433 iterations and 390 s CPU against 799
+#: and 706 s (another local minimum; the old run stopped at its force resolution); the N =
+#: 10⁴ default ramps 7-9 % fewer contact iterations. False: q kept (the engine before the
+#: nineteenth stop).
 ACCURATE_SPRING_SEGMENT = True
 #: Conjugate-gradient iterations per step at most (measured at N = 5 × 10⁴: 2–3 on average).
 ACCURATE_STEP_MAXITER = 50
@@ -109,14 +111,14 @@ def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
     factorisation), in the complement of the zero modes (the springs' rows are orthogonal to
     the rigid motions). Where q's residual in that model already passes the solve's test, q
     is kept without a factorisation. The CG stops at the trust radius or at negative
-    curvature, keeping its last iterate; at negative curvature (with
-    :data:`ACCURATE_SPRING_SEGMENT`) it goes on along that direction to the trust radius. The
-    refined step s is kept if it is a descent direction and lowers the piecewise model of
-    every listed spring, evaluated with the accurate product, below q's (docs/performance.md,
-    "Accurate steps with contacts"). Where it does not (s entered a listed spring that q did
-    not, and the model holds only q's), the step is the least point of that model on the
-    segment from q to s (:func:`_least_between`), with :data:`ACCURATE_SPRING_SEGMENT`, or q
-    without it."""
+    curvature, keeping its last iterate s. The refined step is s if it is a descent direction
+    and lowers the piecewise model of every listed spring, evaluated with the accurate
+    product, below q's (docs/performance.md, "Accurate steps with contacts"); else q. With
+    :data:`ACCURATE_SPRING_SEGMENT`, at negative curvature the point s + (Δ/|d|∞) d (d the
+    direction of negative curvature, Δ the trust radius) is tried first, then s; and where
+    neither passes (it entered a listed spring that q did not, and the CG's model holds only
+    q's), the step is the least point of that model on the segment from q to either
+    (:func:`_least_between`), the first that is a descent direction, before q."""
     if not (ACCURATE_SPRING_STEPS and _applies(st, m, floor)):
         return q
     index, value, offset, stiff = springs
@@ -139,19 +141,23 @@ def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
     s, d, _, why = _cg(st, lambda v: _product(st, v) + held(v), f, project, qf, r, q.shape)
     if why == "none" or not np.all(np.isfinite(s)):
         return q
-    if why == "negative" and ACCURATE_SPRING_SEGMENT and np.isfinite(st.radius):  # on along d
-        s = s + (st.radius / _rows(d, q.shape)) * d
-    hs = _product(st, s)
+    tries = [s]  # the CG's iterate; first, at negative curvature, on along d by the radius
+    if why == "negative" and ACCURATE_SPRING_SEGMENT and np.isfinite(st.radius):
+        tries.insert(0, s + (st.radius / _rows(d, q.shape)) * d)
     before = _spring_model(g, qf, hq, index, value, offset, stiff)
-    after = _spring_model(g, s, hs, index, value, offset, stiff)
-    if after < before and float(g @ s) < 0.0:
-        return s.reshape(q.shape)
+    tried = []
+    for t in tries:
+        ht = _product(st, t)
+        if _spring_model(g, t, ht, index, value, offset, stiff) < before and float(g @ t) < 0.0:
+            return t.reshape(q.shape)
+        tried.append((t, ht))
     if not ACCURATE_SPRING_SEGMENT:
         return q
-    s = _least_between(g, qf, hq, s, hs, index, value, offset, stiff)
-    if s is None or not float(g @ s) < 0.0:
-        return q
-    return s.reshape(q.shape)
+    for t, ht in tried:  # the least point on the way to each, the first that is a step down
+        least = _least_between(g, qf, hq, t, ht, index, value, offset, stiff)
+        if least is not None and float(g @ least) < 0.0:
+            return least.reshape(q.shape)
+    return q
 
 
 def _least_between(g, q, hq, s, hs, index, value, offset, stiff):
@@ -159,10 +165,10 @@ def _least_between(g, q, hq, s, hs, index, value, offset, stiff):
     is least (H by the accurate products ``hq`` = Hq and ``hs`` = Hs, so that Hd = hs - hq
     costs no product), or None where it is not strictly lower there than at q.
 
-    Along the segment the model is g·(q + td) + ½ (q + td)ᵀH(q + td) + the springs' terms: its
-    slope is piecewise linear in t (:func:`crumple.linalg_springs._line_minimum`), exact for
-    positive springs; with a releasing spring or dᵀHd < 0 the root found need not be the
-    least point, which is why the change at it is checked."""
+    Along the segment the model is g·(q + td) + ½ (q + td)ᵀH(q + td) + the springs' terms, its
+    slope piecewise linear in t (:func:`crumple.linalg_springs._line_minimum` finds its
+    root). With positive springs and dᵀHd >= 0 that root is the least point; with a releasing
+    spring or dᵀHd < 0 it need not be, which is why the change at it is checked."""
     d = s - q
     u, v = _rows_dot(index, value, q), _rows_dot(index, value, d)
     hd = hs - hq
