@@ -1593,6 +1593,33 @@ def _wrong_along_the_uniform_mode(n=200, metric=1e-9):
     return fun, hess, x0, kw
 
 
+def test_the_decrease_estimate_drops_a_singular_direction_of_its_ritz_block():
+    """The coarse correction solves with YᵀAY, Y the eigensolve's Ritz block: where A is
+    singular on part of Y that solve raised (measured: an N = 10⁵ ramp stopped on an
+    exception at λ = 754.8). With A = diag(0, 1, 2, 3, 4), a right-hand side b outside its
+    null space and Y holding the null direction, the estimate is bᵀA⁻¹b on the rest, the
+    null direction dropped (and with another, regular direction in Y, that one kept)."""
+    from crumple.minimize_accurate import _coarse_block, _decrease_estimate
+
+    a = np.diag([0.0, 1.0, 2.0, 3.0, 4.0])
+    b = np.array([0.0, 1.0, 1.0, 1.0, 1.0])
+    exact = 1 + 1 / 2 + 1 / 3 + 1 / 4
+    ident = lambda v: v  # noqa: E731
+    null = np.eye(5)[:, :1]
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.solve(null.T @ a @ null, null.T @ b)  # what the correction solved before
+    for ritz in (null, np.eye(5)[:, [0, 2]]):
+        est, why = _decrease_estimate(lambda v: a @ v, b, ident, ident, ritz)
+        assert why == "" and est == pytest.approx(exact, rel=1e-10)
+    y, _, cy = _coarse_block(np.eye(5)[:, [0, 2]], a @ np.eye(5)[:, [0, 2]])
+    np.testing.assert_allclose(np.abs(y.ravel()), np.eye(5)[:, 2])  # the regular one kept
+    assert cy.shape == (1, 1) and cy[0, 0] == pytest.approx(2.0)
+    assert _coarse_block(null, a @ null) == (None, None, None)
+    regular = np.eye(5)[:, [1, 3]]
+    kept = _coarse_block(regular, a @ regular)
+    assert kept[0] is regular  # a regular block as it is: the same iterates as before
+
+
 def test_the_accurate_decrease_is_the_newton_decrease_along_a_soft_mode():
     """On the accurate product, preconditioned by the floored factor of the wrong assembled
     H + σM, the estimate is ½ gᵀH⁻¹g's (0.0333 at the start, nearly all along the soft mode),
