@@ -46,11 +46,11 @@ ACCURATE_SPRING_STEPS = True
 #: by the trust radius's length (:func:`_accurate_spring_step`). Why: at N = 10⁵ the
 #: refinement was thrown away in most steps of a snap-through (the steps were then q, the
 #: factor's springs' step, damped by a shift σM set by the assembled H's round-off).
-#: Measured (docs/performance.md, "The accurate springs' step on its way"): N = 10⁵,
-#: λ = 234.4 from the ramp's λ = 200, converged in 433 iterations and 390 s CPU against 799
-#: and 706 s (another local minimum; the old run stopped at its force resolution); the N =
-#: 10⁴ default ramps 7-9 % fewer contact iterations. False: q kept (the engine before the
-#: nineteenth stop).
+#: Measured (docs/performance.md, "The accurate springs' step on its way"): the N = 10⁴
+#: default ramps 7-9 % fewer contact iterations (seeds 0, 1), the N = 10⁴ cold start 685
+#: iterations against 722; at N = 10⁵ mixed, stage by stage from the same points: λ = 234.4
+#: 390 s against 706 s, λ = 754.8 928 s against 934 s, λ = 917.2 869 s against 502 s (each
+#: one path; the sum about equal). False: q kept (the engine before the nineteenth stop).
 ACCURATE_SPRING_SEGMENT = True
 #: Conjugate-gradient iterations per step at most (measured at N = 5 × 10⁴: 2–3 on average).
 ACCURATE_STEP_MAXITER = 50
