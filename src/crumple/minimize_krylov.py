@@ -147,8 +147,11 @@ def _accurate_spring_step(st, q, springs, ldl, m, floor) -> np.ndarray:
     before = _spring_model(g, qf, hq, index, value, offset, stiff)
     tried = []
     for t in tries:
+        downhill = float(g @ t) < 0.0
+        if not (downhill or ACCURATE_SPRING_SEGMENT):  # no product the answer cannot use
+            continue
         ht = _product(st, t)
-        if _spring_model(g, t, ht, index, value, offset, stiff) < before and float(g @ t) < 0.0:
+        if downhill and _spring_model(g, t, ht, index, value, offset, stiff) < before:
             return t.reshape(q.shape)
         tried.append((t, ht))
     if not ACCURATE_SPRING_SEGMENT:
