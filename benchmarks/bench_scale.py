@@ -232,7 +232,8 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None)
     wrote (the ramp adds no noise between stages by default, so a single stage is the ramp's
     own stage from that start), each next one from the last's minimum: per stage its
     iterations, passes, CPU, and the springs' solves (with the factor, and refactorised) with
-    their CPU and how many found their active set. ``out``: a folder for each stage's
+    their CPU and how many found their active set; at the end the pairs in contact at the last
+    stage and the process's peak memory. ``out``: a folder for each stage's
     positions (None: none)."""
     from crumple.relax import minimize_wire
 
@@ -262,6 +263,10 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None)
             print(f"    springs' solves {key}: {calls}, active set found in {found}, "
                   f"{secs:.1f} s CPU")  # fmt: skip
         print(f"    {res.message}", flush=True)
+    pairs = len(node_segment_pairs(x, wire.hard_core)[0])
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+    print(f"  pairs in contact at stage {last}: {pairs} (d = {wire.hard_core:.0e}), max RSS "
+          f"{rss:.2f} GiB", flush=True)  # fmt: skip
 
 
 @contextlib.contextmanager

@@ -107,7 +107,8 @@ def main(n, k, folder, maxiter=5000, curved=True, every=50):
         undo()
     seg = wire.rest_length
     print(f"== N = {n}, stage {k} (λ = {lam:.4g}) from {folder}'s stage {k - 1}: "
-          f"{res.iterations} iterations, converged {res.converged}, "
+          f"{res.iterations} iterations, converged {res.converged}, energy {res.energy:.12g}, "
+          f"max force {res.max_force:.3g}, "
           f"{time.process_time() - t0:.1f} s CPU; the assembled H's resolution at the start "
           f"{resolution:.3g} per unit length ==")  # fmt: skip
     print("   it exact σ p q step R moved kept listed cg")
