@@ -19,6 +19,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from crumple.geometry import (
+    approach_fraction,
     close_segment_pairs,
     find_crossings,
     has_crossings,
@@ -513,6 +514,61 @@ def test_ccd_motion_along_the_wire_line():
 def test_ccd_rejects_mismatched_step():
     with pytest.raises(ValueError, match="shape"):
         max_safe_fraction(np.zeros((4, 2)), np.zeros((3, 2)))
+
+
+def test_approach_fraction_stops_the_touching_pair_at_the_gap():
+    """The last node dives onto segment 0 (y = 0) from y = 0.5 at speed 2: it touches at
+    t = 1/4 and is 0.1 above the segment at s = 0.2."""
+    pos = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0], [0.5, 0.5]])
+    step = np.zeros_like(pos)
+    step[4] = [0.0, -2.0]
+    t = max_safe_fraction(pos, step)
+    s = approach_fraction(pos, step, t, 0.1)
+    assert s == pytest.approx(0.2, rel=1e-12)
+    assert point_segment_distance((pos + s * step)[4], pos[0], pos[1]) == pytest.approx(0.1)
+    assert approach_fraction(pos, step, 0.1, 0.1) == 0.0  # nothing touches at t = 0.1
+    assert approach_fraction(pos, step, t, 1.0) == 0.0  # within the gap at the start already
+    with pytest.raises(ValueError, match="gap"):
+        approach_fraction(pos, step, t, 0.0)
+
+
+def test_approach_fraction_moving_segment():
+    """Segment 0 moves up onto the still last node (contact at t = 1/3): the pair is
+    ``gap`` apart at s = (1 - gap) / 3."""
+    pos = np.array(
+        [[0.0, 0.0], [2.0, 0.0], [2.0, -1.0], [3.0, -1.0], [3.0, 2.0], [1.0, 2.0], [1.0, 1.0]]
+    )
+    step = np.zeros_like(pos)
+    step[[0, 1]] = [0.0, 3.0]
+    t = max_safe_fraction(pos, step)
+    assert approach_fraction(pos, step, t, 0.25) == pytest.approx(0.75 / 3.0, rel=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(3, 25),
+    amplitude=st.sampled_from([0.1, 0.5, 1.0, 3.0]),
+    gap=st.sampled_from([1e-3, 1e-2, 0.1]),
+)
+def test_approach_fraction_property_short_of_the_contact_and_safe(seed, n, amplitude, gap):
+    """Wherever it is positive: below the contact fraction, no crossing on the way, and the
+    nearest touching pair at the gap (within round-off)."""
+    rng = np.random.default_rng(seed)
+    pos = random_walk(rng, n, turn=2.5)
+    assume(not has_crossings(pos))
+    step = amplitude * rng.standard_normal(pos.shape)
+    t = max_safe_fraction(pos, step)
+    assume(t < 1.0)
+    s = approach_fraction(pos, step, t, gap)
+    assert 0.0 <= s < t
+    if s > 0.0:
+        assert max_safe_fraction(pos, s * step) == 1.0
+        _assert_safe_path(pos, step, s, samples=20, fraction=1.0)
+        ks, js = node_segment_pairs(pos + t * step, 0.5 * gap)
+        at = pos + s * step
+        near = min(point_segment_distance(at[k], at[j], at[j + 1]) for k, j in zip(ks, js))
+        assert near == pytest.approx(gap, rel=1e-9)
 
 
 @settings(max_examples=80, deadline=None)

@@ -306,6 +306,29 @@ def test_feasible_and_step_limit_keep_iterates_admissible():
     rec.assert_monotone()
 
 
+def test_cut_stops_a_cut_step_where_the_caller_says():
+    """Minimum at x = 2, wall at x = 1 (the step_limit cuts the first step, from 0, at half
+    of it): the step stops at 0.8 of the contact (x = 0.8) by default, at the caller's
+    fraction where that lies between 0.8 t and t (x = 0.99), and at 0.8 t again where the
+    caller's lies outside (at t itself, or short of 0.8 t)."""
+
+    def f(x):
+        return float((x[0] - 2) ** 2 + x[1] ** 2), np.array([2 * (x[0] - 2), 2 * x[1]])
+
+    def step_limit(x, p):
+        return 1.0 if x[0] + p[0] < 1 else max(0.0, (1 - x[0]) / p[0])
+
+    def first(cut):
+        r = newton(f, [0.0, 0.0], hess=lambda x: 2 * np.eye(2), step_limit=step_limit,
+                   feasible=lambda x: x[0] < 1, maxiter=1, cut=cut)  # fmt: skip
+        return r.x[0]
+
+    assert first(None) == pytest.approx(0.8)
+    assert first(lambda x, p, t: 0.99 * t) == pytest.approx(0.99)
+    assert first(lambda x, p, t: t) == pytest.approx(0.8)
+    assert first(lambda x, p, t: 0.5 * t) == pytest.approx(0.8)
+
+
 def test_feasible_alone_rejects_bad_points():
     def f(x):
         return float((x[0] - 2) ** 2), np.array([2 * (x[0] - 2)])

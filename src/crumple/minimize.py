@@ -86,6 +86,7 @@ def newton(
     springs_from_segment: bool = False,
     springs_solve_limit: int | None = None,
     patience: int | None = None,
+    cut: Callable[[np.ndarray, np.ndarray, float], float] | None = None,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -147,7 +148,8 @@ def newton(
         Largest displacement of any row in one step (the largest trust radius), in the units
         of ``x``. None: no cap.
     step_limit : callable, optional
-        ``step_limit(x, p) -> t`` in (0, 1]: the fraction of ``p`` that is safe to take.
+        ``step_limit(x, p) -> t`` in (0, 1]: the fraction of ``p`` that is safe to take. A
+        step it cuts (t < 1) is taken to 0.8 t, or further with ``cut``.
     feasible : callable, optional
         ``feasible(x) -> bool``, checked on every point before it is accepted.
     curvature_tol : float
@@ -229,6 +231,11 @@ def newton(
         Stop, unconverged, once this many iterations have passed without the energy going
         below its lowest value by more than its resolution (:func:`resolution`): a pass that
         no longer makes progress (the polish of ``crumple.relax_polish``). None: no such stop.
+    cut : callable, optional
+        ``cut(x, p, t) -> s``: where to stop a step ``p`` that ``step_limit`` cuts at ``t < 1``,
+        a fraction of p; taken where it lies between 0.8 t and t (else 0.8 t). E.g. where the
+        pairs that would touch at t are brought to the edge of the ``barriers`` listing, so
+        that the next step's model sees them (:func:`crumple.geometry.approach_fraction`).
 
     Returns
     -------
@@ -269,6 +276,7 @@ def newton(
     if springs_solve_limit is not None and int(springs_solve_limit) < 0:
         raise ValueError(f"springs_solve_limit must be >= 0 or None, got {springs_solve_limit!r}")
     st.springs_solve_limit = None if springs_solve_limit is None else int(springs_solve_limit)
+    st.cut = cut
     if patience is not None:
         if int(patience) < 1:
             raise ValueError(f"patience must be >= 1, got {patience!r}")

@@ -48,6 +48,7 @@ class _State:
     accurate_steps: bool = False  # newton(accurate_steps=...)
     springs_from_segment: bool = False  # newton(springs_from_segment=...)
     springs_solve_limit: int | None = None  # newton(springs_solve_limit=...)
+    cut: Callable | None = None  # newton(cut=...)
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)
     entered: np.ndarray | None = None  # the index rows of the springs that step entered
     pending: np.ndarray | None = None  # a refused point's step, for the next iteration

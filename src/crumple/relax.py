@@ -14,7 +14,7 @@ import numpy as np
 
 from .energy import WireEnergy, confinement_weights
 from .geometry import disc_exit_fraction, has_crossings
-from .geometry.ccd import _safe_fraction
+from .geometry.ccd import _approach, _safe_fraction
 from .geometry.crossings import _has_crossings
 from .geometry.curved import _curved_step, _largest_turn
 from .minimize import MinimizeResult, newton, powell
@@ -115,6 +115,16 @@ SEGMENT_START_ABOVE: int | None = 1000
 #: reproduction keeps its iterates.
 SOLVE_LIMIT_ABOVE: int | None = 1000
 SPRINGS_SOLVE_LIMIT = 1000
+#: Above this many segments (None: never) a step that collision detection cuts stops where
+#: the pairs that would touch are ``d + APPROACH_SKIN × skin`` apart (inside the barriers'
+#: listing, outside the core: :func:`crumple.geometry.approach_fraction`), where that is
+#: further than 0.8 of the contact (``newton(cut=...)``). Why: the listing holds the pairs of
+#: the Verlet list (d + a tenth of a segment), so a step of hundreds of segments meets pairs
+#: it did not list, and 0.8 of the contact leaves such a pair at a fifth of its gap, outside
+#: the listing again: at N = 10⁵ a contact half a segment to ten segments away cost two to
+#: four cut steps. Not below: the reproduction keeps its iterates.
+APPROACH_ABOVE: int | None = None
+APPROACH_SKIN = 0.5
 
 Method = Literal["newton", "powell"]
 
@@ -276,6 +286,11 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
     free_rotation = fixed is None or not fixed.any()  # with any node fixed, no rigid motion
     curved = (CURVED_STEPS if curved_steps is None else bool(curved_steps)) and free_rotation
     hess = energy.hessian_csc  # one bound method: the fallback below is this very object
+    cut = (
+        _approach_cut(wire, energy)
+        if anticipate_contacts and _above(wire, APPROACH_ABOVE)
+        else None
+    )
     return dict(
         hess=hess,
         # contacts projected on their positive part; bending and stretching exact (measured:
@@ -296,7 +311,19 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
         springs_from_segment=_above(wire, SEGMENT_START_ABOVE),
         springs_solve_limit=SPRINGS_SOLVE_LIMIT if _above(wire, SOLVE_LIMIT_ABOVE) else None,
+        cut=cut,
     )
+
+
+def _approach_cut(wire: Wire, energy: WireEnergy):
+    """``newton(cut=...)``: the fraction of a cut step at which the pairs that would touch
+    are ``d + APPROACH_SKIN × skin`` apart (:data:`APPROACH_ABOVE`)."""
+    gap = wire.hard_core + APPROACH_SKIN * energy.skin
+
+    def cut(x, p, safe):
+        return _approach(x, p.reshape(x.shape), safe, gap)
+
+    return cut
 
 
 def _above(wire: Wire, threshold: int | None) -> bool:

@@ -22,7 +22,7 @@ public is imported from here.
 """
 
 from ._input import as_positions
-from .ccd import disc_exit_fraction, max_safe_fraction
+from .ccd import approach_fraction, disc_exit_fraction, max_safe_fraction
 from .crossings import find_crossings, has_crossings
 from .curved import curved_step
 from .distance import (
@@ -35,6 +35,7 @@ from .distance import (
 )
 
 __all__ = [
+    "approach_fraction",
     "as_positions",
     "close_segment_pairs",
     "curved_step",
