@@ -30,7 +30,7 @@ from crumple.geometry import (
     segment_lengths,
     turning_angles,
 )
-from crumple.geometry.ccd import _max_safe_fraction, _max_safe_fraction_tree
+from crumple.geometry.ccd import _max_safe_fraction, _max_safe_fraction_tree, _nearest
 from crumple.geometry.crossings import _crossing_candidates
 
 # --------------------------------------------------------------------------------------------
@@ -527,6 +527,7 @@ def test_approach_fraction_stops_the_touching_pair_at_the_gap():
     assert s == pytest.approx(0.2, rel=1e-12)
     assert point_segment_distance((pos + s * step)[4], pos[0], pos[1]) == pytest.approx(0.1)
     assert approach_fraction(pos, step, 0.1, 0.1) == 0.0  # nothing touches at t = 0.1
+    assert approach_fraction(pos[:2], step[:2], t, 0.1) == 0.0  # one segment: no pair
     assert approach_fraction(pos, step, t, 1.0) == 0.0  # within the gap at the start already
     with pytest.raises(ValueError, match="gap"):
         approach_fraction(pos, step, t, 0.0)
@@ -567,8 +568,10 @@ def test_approach_fraction_property_short_of_the_contact_and_safe(seed, n, ampli
         _assert_safe_path(pos, step, s, samples=20, fraction=1.0)
         ks, js = node_segment_pairs(pos + t * step, 0.5 * gap)
         at = pos + s * step
-        near = min(point_segment_distance(at[k], at[j], at[j + 1]) for k, j in zip(ks, js))
+        pairs = zip(ks, js, strict=True)
+        near = min(point_segment_distance(at[k], at[j], at[j + 1]) for k, j in pairs)
         assert near == pytest.approx(gap, rel=1e-9)
+        assert _nearest(pos, step, s, ks, js) > gap  # on the far side of the gap, not past it
 
 
 @settings(max_examples=80, deadline=None)

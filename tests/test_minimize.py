@@ -329,6 +329,29 @@ def test_cut_stops_a_cut_step_where_the_caller_says():
     assert first(lambda x, p, t: 0.5 * t) == pytest.approx(0.8)
 
 
+def test_cut_is_given_the_step_capped_at_the_trust_radius():
+    """With max_step = 0.75 the first step (2, 0) is capped to (0.75, 0), and a wall at
+    x = 0.5 cuts that at t = 2/3: ``cut`` gets the capped step, and a cut that stops at
+    x = 0.495 (s = 0.66 of it) lands there (0.8 t would give x = 0.4)."""
+
+    def f(x):
+        return float((x[0] - 2) ** 2), np.array([2 * (x[0] - 2)])
+
+    def step_limit(x, p):
+        return 1.0 if x[0] + p[0] < 0.5 else max(0.0, (0.5 - x[0]) / p[0])
+
+    seen = []
+
+    def cut(x, p, t):
+        seen.append(float(p[0]))
+        return (0.495 - x[0]) / p[0]
+
+    r = newton(f, [0.0], hess=lambda x: np.array([[2.0]]), step_limit=step_limit,
+               max_step=0.75, maxiter=1, cut=cut)  # fmt: skip
+    assert seen == [pytest.approx(0.75)]
+    assert r.x[0] == pytest.approx(0.495)
+
+
 def test_feasible_alone_rejects_bad_points():
     def f(x):
         return float((x[0] - 2) ** 2), np.array([2 * (x[0] - 2)])

@@ -233,6 +233,45 @@ def test_curved_steps_keep_a_contact_ramp_at_true_equilibria(monkeypatch):
     assert r.converged and r.curved_steps == 0
 
 
+def test_approach_cut_keeps_a_contact_ramp_at_true_equilibria(monkeypatch):
+    """The approach cut (``relax.APPROACH_ABOVE``, off by default) at N = 100: a contact ramp
+    still ends every stage converged and stable, never crossing, no accepted step raising
+    the energy; and cut steps are taken past 0.8 of their contact."""
+    monkeypatch.setattr(relax, "APPROACH_ABOVE", 0)
+    further = []
+    approach = relax._approach
+
+    def counted(x, p, safe, gap):
+        s = approach(x, p, safe, gap)
+        further.append(s > 0.8 * safe)
+        return s
+
+    monkeypatch.setattr(relax, "_approach", counted)
+    wire, lams = Wire(k_b=5, k_s=5e5), (1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0)
+    on, audit = audited_ramp(wire, Ramp(lambdas=lams), seed=2)
+    assert on.converged and not audit.violations, audit.violations[:5]
+    assert on.stages[-1].energy.hard_core > 0
+    assert sum(further) > 0
+
+
+def test_approach_cut_leaves_a_cut_by_the_wall_alone():
+    """In a cavity, a step that the wall cuts (node 2 leaves the disc at t = 0.46) while a
+    pair closes in (node 4 reaches segment 0 at 0.5, and is within the gap at 0.46) keeps the
+    default cut: the approach is a pair's, not the wall's. Without the wall, the same pair
+    gives the approach fraction (node 4 at d + skin / 2 = 0.1125 above segment 0)."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=4, cavity_radius=1.5, hard_core=0.1)
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.5, 1.0], [0.5, 0.5]])
+    p = np.zeros_like(x)
+    p[4] = [0.0, -1.0]
+    p[2] = [0.1319, 0.1319]
+    safe = relax._step_limit(1.5)(x, p)
+    assert safe == pytest.approx(0.46, abs=1e-3)
+    energy = WireEnergy(wire, 1.0)
+    assert relax._approach_cut(wire, energy)(x, p, safe) == 0.0
+    free = dataclasses.replace(wire, cavity_radius=None)
+    assert relax._approach_cut(free, WireEnergy(free, 1.0))(x, p, safe) == pytest.approx(0.3875)
+
+
 def test_exact_fallback_keeps_a_contact_ramp_at_true_equilibria():
     """The exact fallback with the σ search (``Ramp(fallback="exact")``, the default above
     ``relax.EXACT_FALLBACK_ABOVE`` segments) at N = 100: a contact ramp still ends every stage

@@ -106,7 +106,8 @@ def newton(
     at ``max_step``, shrinks to the displacement that was accepted when the line search had
     to backtrack, and doubles back towards ``max_step`` after a capped step accepted at once.
     It is a length in the caller's units, so it means the same whatever the number of rows.
-    The step is then cut to 0.8 of ``step_limit(x, p)`` when that is below 1, and halved until
+    The step is then cut to 0.8 of ``step_limit(x, p)`` when that is below 1 (or where ``cut``
+    says, between that and the contact), and halved until
     the Armijo condition holds and ``feasible`` accepts the point. Near convergence the
     decrease of the energy falls below its floating-point resolution ``16 ε_mach |E|``; a step
     is then accepted when its energy change lies within that resolution and it strictly
@@ -232,10 +233,11 @@ def newton(
         below its lowest value by more than its resolution (:func:`resolution`): a pass that
         no longer makes progress (the polish of ``crumple.relax_polish``). None: no such stop.
     cut : callable, optional
-        ``cut(x, p, t) -> s``: where to stop a step ``p`` that ``step_limit`` cuts at ``t < 1``,
-        a fraction of p; taken where it lies between 0.8 t and t (else 0.8 t). E.g. where the
-        pairs that would touch at t are brought to the edge of the ``barriers`` listing, so
-        that the next step's model sees them (:func:`crumple.geometry.approach_fraction`).
+        ``cut(x, p, t) -> s``: where to stop a line search's step ``p`` (already capped at the
+        trust radius) that ``step_limit`` cuts at ``t < 1``, as a fraction of p; taken where
+        0.8 t < s < t strictly, else 0.8 t. E.g. where the pairs that would touch at t are
+        brought to the edge of the ``barriers`` listing, so that the next step's model sees
+        them (:func:`crumple.geometry.approach_fraction`). The saddle escapes keep 0.8 t.
 
     Returns
     -------

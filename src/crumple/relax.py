@@ -317,11 +317,16 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
 
 def _approach_cut(wire: Wire, energy: WireEnergy):
     """``newton(cut=...)``: the fraction of a cut step at which the pairs that would touch
-    are ``d + APPROACH_SKIN × skin`` apart (:data:`APPROACH_ABOVE`)."""
+    are ``d + APPROACH_SKIN × skin`` apart (:data:`APPROACH_ABOVE`); 0 (the default cut)
+    where the cavity's wall is what cuts it."""
     gap = wire.hard_core + APPROACH_SKIN * energy.skin
+    radius = wire.cavity_radius
 
     def cut(x, p, safe):
-        return _approach(x, p.reshape(x.shape), safe, gap)
+        p = p.reshape(x.shape)
+        if radius is not None and disc_exit_fraction(x, p, radius) <= safe:
+            return 0.0
+        return _approach(x, p, safe, gap)
 
     return cut
 

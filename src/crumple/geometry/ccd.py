@@ -432,14 +432,37 @@ def disc_exit_fraction(positions, step, radius: float) -> float:
 
 
 def approach_fraction(positions, step, t: float, gap: float) -> float:
-    """The fraction ``s`` in ``[0, t)`` of a straight step at which the node-segment pairs
-    that touch at ``t`` (closer than ``gap / 2`` at ``positions + t * step``, ``t`` a contact
-    fraction of :func:`max_safe_fraction`) are first ``gap`` apart, by bisection; 0.0 where no
-    such pair is found or one of them is within ``gap`` already at the start.
+    """Where to stop a straight step short of a contact: the touching pairs ``gap`` apart.
 
-    A step cut at a fixed fraction of the contact (0.8 t, say) leaves a pair that was far at a
-    fifth of its gap, and the next step, cut again, at a fifth of that: a contact far from the
-    start costs several cut steps. Stopping it at ``gap`` costs one.
+    The node-segment pairs that touch at the fraction ``t`` of the step (a contact fraction
+    of :func:`max_safe_fraction`) are those closer than ``gap / 2`` at
+    ``positions + t * step``; the fraction returned is a point of ``[0, t)`` at which the
+    nearest of them is ``gap`` apart, found by bisection (the first such point where their
+    distance falls monotonically; where it does not, one of them). A step cut at a fixed
+    fraction of the contact (0.8 t, say) leaves a pair that was far at a fifth of its gap,
+    and the next step, cut again, at a fifth of that: a contact far from the start costs
+    several cut steps. Stopped at ``gap`` it costs one.
+
+    Parameters
+    ----------
+    positions, step : array_like, shape (n_nodes, 2)
+        Start configuration and displacement ``[length]``.
+    t : float
+        The contact fraction, in ``(0, 1]``.
+    gap : float
+        The distance to stop the touching pairs at ``[length]``, positive.
+
+    Returns
+    -------
+    float
+        The fraction, below ``t``; 0.0 where no pair is found closer than ``gap / 2`` at ``t``
+        (the cut was not a pair's: a wall's, say) or one of them is within ``gap`` already at
+        the start.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ, or ``t`` or ``gap`` is out of range.
 
     Examples
     --------
@@ -454,6 +477,8 @@ def approach_fraction(positions, step, t: float, gap: float) -> float:
         raise ValueError(f"step has shape {stp.shape}, positions {pos.shape}")
     if not (0.0 < t <= 1.0 and gap > 0.0):
         raise ValueError(f"need 0 < t <= 1 and gap > 0, got t = {t!r}, gap = {gap!r}")
+    if pos.shape[0] < 3:
+        return 0.0
     return _approach(pos, stp, float(t), float(gap))
 
 
