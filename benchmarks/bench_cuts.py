@@ -10,8 +10,8 @@ contact are found, and the line prints t, the step's largest row displacement, a
 nearest of those pairs' distance before the step and at 0.8 t (the default cut), in segment
 lengths. The barriers' listing holds the pairs within d + a tenth of a segment (the Verlet
 list), so a pair farther than that was not in the step's model. ``approach=on`` runs the stage
-with the approach cut (``relax.APPROACH_ABOVE = 0``). Results: docs/performance.md, "The
-N = 10⁵ schedule to its end".
+with the approach cut (``relax.APPROACH_ABOVE = 0``). Results: docs/performance.md, "The last
+stages of the N = 10⁵ schedule".
 """
 
 from __future__ import annotations

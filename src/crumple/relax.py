@@ -122,10 +122,10 @@ SPRINGS_SOLVE_LIMIT = 1000
 #: the Verlet list (d + a tenth of a segment), so a step of hundreds of segments meets pairs
 #: it did not list, and 0.8 of the contact leaves such a pair at a fifth of its gap, outside
 #: the listing again: at N = 10⁵ a contact half a segment to ten segments away cost two to
-#: four cut steps. Measured (docs/performance.md, "The N = 10⁵ schedule to its end"): N = 10⁴
-#: default ramps 6 % and 11 % fewer contact iterations (seeds 0, 1), 3 % and 7 % less CPU; at
-#: N = 10⁵ stage 31 equal, stages 40 and 41 2.4× and 1.8× slower (more pairs listed, more
-#: springs' solves, the late stages' cost). Off: opt-in until a better springs' step.
+#: four cut steps. Measured (docs/performance.md, "The last stages of the N = 10⁵ schedule"):
+#: N = 10⁴ default ramps 6 % and 11 % fewer contact iterations (seeds 0, 1), 3 % and 7 % less
+#: CPU; at N = 10⁵ stage 31 equal, stages 40 and 41 2.4× and 1.8× slower (more pairs listed,
+#: more springs' solves, the late stages' cost). Off: opt-in until a better springs' step.
 APPROACH_ABOVE: int | None = None
 APPROACH_SKIN = 0.5
 
