@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from .linalg_order import _rcm
+from .linalg_order import _rcm, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
 __all__ = ["CSC", "LDLT", "Factorization"]
@@ -284,20 +284,19 @@ class CSC:
 class _Symbolic:
     """A pattern's fill-reducing order, permuted upper pattern, elimination tree and L's shape."""
 
-    def __init__(self, a: sp.csc_matrix):
+    def __init__(self, a: sp.csc_matrix, candidate=None):
         n = a.shape[0]
         self.n = n
         self.indptr, self.indices = a.indptr, a.indices
-        # the natural order unless RCM's L is strictly smaller; RCM counted first, so that the
-        # natural order's count (all fill, for a packed wire) stops once it is beaten
-        perm = _rcm(a)
-        ap, ai, src = _permuted_upper(a, perm)
-        best = (perm, ap, ai, src, *_etree(n, ap, ai))
-        perm = np.arange(n)
-        ap, ai, src = _permuted_upper(a, perm)
-        parent, lnz, total = _etree(n, ap, ai, best[-1])
-        if total >= 0:
-            best = (perm, ap, ai, src, parent, lnz, total)
+        # the order with the fewest nonzeros in L, the later on a tie, of a caller's candidate
+        # (a nested dissection), RCM and the natural order, counted in that order so that a
+        # later count (all fill, for the natural order of a packed wire) stops once beaten
+        best = None
+        for perm in ((candidate,) if candidate is not None else ()) + (_rcm(a), np.arange(n)):
+            ap, ai, src = _permuted_upper(a, perm)
+            parent, lnz, total = _etree(n, ap, ai, -1 if best is None else best[-1])
+            if total >= 0:
+                best = (perm, ap, ai, src, parent, lnz, total)
         self.perm, self.ap, self.ai, self.src, self.parent, lnz, total = best
         self.lp = np.zeros(n + 1, dtype=np.int64)
         np.cumsum(lnz, out=self.lp[1:])
@@ -485,22 +484,37 @@ class LDLT:
     (True, True)
     >>> LDLT().factorize(a, shift=np.full(3, -2.5)).negative    # eigenvalues 1.27, 3, 4.73
     1
+
+    ``points``, a callable, gives the points the unknowns sit at when a pattern is analysed
+    (an array (n_points, dim), unknown k at row k // (n / n_points); None: none). The
+    fill-reducing order is then also sought by a nested dissection of them
+    (:func:`crumple.linalg_order.nested_dissection`), kept where its L is smallest.
     """
 
-    def __init__(self):
+    def __init__(self, points=None):
         self._sym: _Symbolic | None = None
+        self._points = points
         self.analyses = 0
         self.factorizations = 0
 
     def symbolic(self, a) -> _Symbolic:
         if self._sym is None or not self._sym.matches(a):
-            sym = _Symbolic(a)
+            sym = _Symbolic(a, self._candidate(a))
             sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(
                 sym.n, sym.ap, sym.ai, sym.parent, sym.lp
             )
             self._sym = sym
             self.analyses += 1
         return self._sym
+
+    def _candidate(self, a):
+        """The nested dissection of the unknowns' points (``points()``), where it has them."""
+        if self._points is None:
+            return None
+        pts = self._points()
+        if pts is None or np.ndim(pts) != 2 or len(pts) == 0 or a.shape[0] % len(pts):
+            return None
+        return nested_dissection(pts, a)
 
     def factorize(self, a, *, shift=None, floor=None, trial=False) -> Factorization:
         """Factorise ``a + diag(shift)`` (a symmetric CSC matrix holding both triangles: SciPy

@@ -1,5 +1,6 @@
-"""The fill-reducing order of :mod:`crumple.linalg`'s symbolic analysis: reverse Cuthill–McKee
-on a structurally symmetric CSC pattern (Numba kernels). Private."""
+"""The fill-reducing orders of :mod:`crumple.linalg`'s symbolic analysis, on a structurally
+symmetric CSC pattern (Numba kernels): reverse Cuthill–McKee, and a nested dissection by the
+points the unknowns sit at (geometric, for a caller that has them). Private."""
 
 from __future__ import annotations
 
@@ -77,3 +78,134 @@ def _rcm_kernel(n, indptr, indices, degree, by_degree):
         if count == n:
             break
     return order[::-1].copy()
+
+
+#: The nested dissection stops splitting at this many points; a leaf keeps their natural order
+#: (for a wire, runs of the chain: a band). Measured on the Hessian of a packed N = 10⁵ wire
+#: (``benchmarks/bench_order.py``, stage 43; docs/performance.md, "Nested dissection"): the
+#: factorisation's multiply-adds 1.87 / 1.84 / 1.98 / 2.66 × 10⁷ at leaves of 8 / 16 / 32 / 64
+#: points, against 4.80 × 10⁷ for reverse Cuthill–McKee.
+ND_LEAF = 16
+
+
+def nested_dissection(points, a, leaf: int | None = None) -> np.ndarray:
+    """A nested-dissection order of the unknowns of the structurally symmetric pattern ``a``
+    (CSC arrays, both triangles), where unknown k belongs to point k // per of ``points``
+    (n_points, dim) and per = n_unknowns / n_points (a wire's nodes: their two coordinates).
+
+    The points are split at the median of their widest coordinate; the points of the lower
+    half that share an entry with the upper half are the separator and go last, and each half
+    is ordered so in turn, down to ``leaf`` points (None: :data:`ND_LEAF`). This is George's
+    nested dissection with a geometric split, as in Miller, Teng, Thurston and Vavasis. As
+    for :func:`_rcm`, ``order[i]`` is the unknown that goes i-th.
+
+    >>> import scipy.sparse as sp
+    >>> chain = sp.diags([1.0, 2.0, 1.0], [-1, 0, 1], shape=(8, 8), format="csc")
+    >>> nested_dissection(np.arange(8.0)[:, None], chain, leaf=2).tolist()
+    [0, 2, 1, 4, 6, 7, 5, 3]
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[0] == 0 or a.shape[0] % pts.shape[0]:
+        raise ValueError(f"points of shape {pts.shape} do not hold the {a.shape[0]} unknowns")
+    per = a.shape[0] // pts.shape[0]
+    gp, gv = _point_graph(pts.shape[0], per, np.asarray(a.indptr, dtype=np.int64),
+                          np.asarray(a.indices, dtype=np.int64))  # fmt: skip
+    nodes = _dissect(pts, gp, gv, max(1, int(ND_LEAF if leaf is None else leaf)))
+    return (per * np.repeat(nodes, per) + np.tile(np.arange(per), nodes.shape[0])).astype(np.int64)
+
+
+@njit(cache=True)
+def _point_graph(n_points, per, indptr, indices):
+    """The points' adjacency (CSR, repeats kept) of the unknowns' pattern: an entry (i, j)
+    joins point i // per and j // per."""
+    deg = np.zeros(n_points + 1, dtype=np.int64)
+    for j in range(indptr.shape[0] - 1):
+        for q in range(indptr[j], indptr[j + 1]):
+            if indices[q] // per != j // per:
+                deg[j // per + 1] += 1
+    gp = np.cumsum(deg)
+    fill = gp[:-1].copy()
+    gv = np.empty(gp[-1], dtype=np.int64)
+    for j in range(indptr.shape[0] - 1):
+        for q in range(indptr[j], indptr[j + 1]):
+            u, v = j // per, indices[q] // per
+            if u != v:
+                gv[fill[u]] = v
+                fill[u] += 1
+    return gp, gv
+
+
+@njit(cache=True)
+def _dissect(pts, gp, gv, leaf):
+    """The points' nested-dissection order (:func:`nested_dissection`): each range of ``order``
+    a subproblem, split into [lower half less its separator, upper half, separator]."""
+    n = pts.shape[0]
+    order = np.arange(n)
+    tag = np.full(n, -1, dtype=np.int64)  # 2c / 2c + 1: lower / upper half of split c
+    sep = np.zeros(n, dtype=np.bool_)
+    tmp = np.empty(n, dtype=np.int64)
+    lo_stack = np.empty(n + 1, dtype=np.int64)
+    hi_stack = np.empty(n + 1, dtype=np.int64)
+    lo_stack[0], hi_stack[0], top, c = 0, n, 1, 0
+    while top > 0:
+        top -= 1
+        lo, hi = lo_stack[top], hi_stack[top]
+        if hi - lo <= leaf:
+            order[lo:hi] = np.sort(order[lo:hi])
+            continue
+        axis, widest = 0, -1.0
+        for d in range(pts.shape[1]):
+            lo_v, hi_v = np.inf, -np.inf
+            for i in range(lo, hi):
+                lo_v = min(lo_v, pts[order[i], d])
+                hi_v = max(hi_v, pts[order[i], d])
+            if hi_v - lo_v > widest:
+                axis, widest = d, hi_v - lo_v
+        vals = np.empty(hi - lo)
+        for i in range(lo, hi):
+            vals[i - lo] = pts[order[i], axis]
+        med = np.median(vals)
+        c += 1
+        lower = 0
+        for i in range(lo, hi):
+            if pts[order[i], axis] <= med:
+                tag[order[i]] = 2 * c
+                lower += 1
+            else:
+                tag[order[i]] = 2 * c + 1
+        if lower == hi - lo:  # every point on the median (a degenerate cloud): split the range
+            for i in range(lo + (hi - lo) // 2, hi):
+                tag[order[i]] = 2 * c + 1
+        n_sep = 0
+        for i in range(lo, hi):
+            u = order[i]
+            if tag[u] == 2 * c:
+                for q in range(gp[u], gp[u + 1]):
+                    if tag[gv[q]] == 2 * c + 1:
+                        sep[u] = True
+                        n_sep += 1
+                        break
+        n_low = 0
+        for i in range(lo, hi):
+            if tag[order[i]] == 2 * c and not sep[order[i]]:
+                n_low += 1
+        n_up = hi - lo - n_low - n_sep
+        ia, ib, isp = lo, lo + n_low, lo + n_low + n_up
+        for i in range(lo, hi):
+            u = order[i]
+            if sep[u]:
+                tmp[isp] = u
+                isp += 1
+                sep[u] = False
+            elif tag[u] == 2 * c:
+                tmp[ia] = u
+                ia += 1
+            else:
+                tmp[ib] = u
+                ib += 1
+        order[lo:hi] = tmp[lo:hi]
+        order[lo + n_low + n_up : hi] = np.sort(order[lo + n_low + n_up : hi])
+        lo_stack[top], hi_stack[top] = lo, lo + n_low
+        lo_stack[top + 1], hi_stack[top + 1] = lo + n_low, lo + n_low + n_up
+        top += 2
+    return order

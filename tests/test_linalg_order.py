@@ -1,0 +1,122 @@
+"""The nested dissection of the unknowns' points (``crumple.linalg_order.nested_dissection``)
+and its use as a candidate fill-reducing order of the sparse LDLᵀ."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crumple.linalg import LDLT
+from crumple.linalg_order import nested_dissection
+
+
+def _cloud_pattern(rng, n, dim, reach):
+    """Random points, and the unknowns' pattern (dim unknowns per point, both triangles) of a
+    chain through them plus every pair closer than ``reach``."""
+    pts = rng.random((n, dim))
+    i, j = np.nonzero(np.triu(np.linalg.norm(pts[:, None] - pts[None], axis=-1) < reach, 1))
+    i = np.concatenate([i, np.arange(n - 1)])
+    j = np.concatenate([j, np.arange(1, n)])
+    node = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n))
+    node = ((node + node.T + sp.eye(n)) != 0).astype(float)
+    return pts, sp.kron(node, np.ones((dim, dim)), format="csc")
+
+
+def _grid(k):
+    """The 5-point Laplacian of a k × k grid (one unknown per point), and its points."""
+    one = sp.diags([-np.ones(k - 1), np.full(k, 2.0), -np.ones(k - 1)], [-1, 0, 1])
+    a = (sp.kron(one, sp.eye(k)) + sp.kron(sp.eye(k), one) + 1e-3 * sp.eye(k * k)).tocsc()
+    x, y = np.meshgrid(np.arange(k, dtype=float), np.arange(k, dtype=float), indexing="ij")
+    return a, np.column_stack([x.ravel(), y.ravel()])
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 120), dim=st.integers(1, 3),
+       leaf=st.integers(1, 40), reach=st.floats(0.0, 0.4))  # fmt: skip
+def test_the_order_is_a_permutation_keeping_each_points_unknowns_together(seed, n, dim, leaf,
+                                                                          reach):  # fmt: skip
+    pts, a = _cloud_pattern(np.random.default_rng(seed), n, dim, reach)
+    order = nested_dissection(pts, a, leaf=leaf)
+    assert sorted(order.tolist()) == list(range(n * dim))
+    blocks = order.reshape(n, dim)
+    np.testing.assert_array_equal(blocks - blocks[:, :1], np.tile(np.arange(dim), (n, 1)))
+
+
+def _one_split(pts, node_pattern):
+    """The order of one dissection (a numpy reference): the points at or below the median of
+    the widest coordinate, less those joined to the others; the others; the separator."""
+    axis = int(np.argmax(np.ptp(pts, axis=0)))
+    lower = pts[:, axis] <= np.median(pts[:, axis])
+    if lower.all():
+        lower = np.arange(len(pts)) < len(pts) // 2
+    joined = np.asarray((node_pattern[lower][:, ~lower] != 0).sum(axis=1)).ravel() > 0
+    sep = np.zeros(len(pts), bool)
+    sep[np.flatnonzero(lower)[joined]] = True
+    idx = np.arange(len(pts))
+    return np.concatenate([idx[lower & ~sep], idx[~lower], idx[sep]]), lower & ~sep, ~lower
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 80), reach=st.floats(0.0, 0.3))
+def test_one_dissection_splits_at_the_median_with_the_joined_points_last(seed, n, reach):
+    """With a leaf of n - 1 points there is exactly one split: the order is the reference's,
+    and no entry joins the two halves that precede the separator."""
+    pts, a = _cloud_pattern(np.random.default_rng(seed), n, 2, reach)
+    node = a[::2, ::2]
+    expected, low, up = _one_split(pts, node)
+    order = nested_dissection(pts, a, leaf=n - 1)
+    np.testing.assert_array_equal(order[::2] // 2, expected)
+    assert node[low][:, up].nnz == 0
+
+
+def test_a_grid_fills_far_less_than_reverse_cuthill_mckee():
+    """On the 5-point grid, the classic case: nested dissection's L is well below the band of
+    reverse Cuthill–McKee (k³ nonzeros), and the LDLᵀ given the points keeps it."""
+    a, pts = _grid(60)
+    plain, by_points = LDLT(), LDLT(points=lambda: pts)
+    rcm = plain.symbolic(a).l_nnz
+    nd = by_points.symbolic(a)
+    assert nd.l_nnz < 0.6 * rcm
+    np.testing.assert_array_equal(nd.perm, nested_dissection(pts, a))
+
+
+@pytest.mark.parametrize("n", [10, 200])
+def test_a_chain_keeps_its_band_with_points_given(n):
+    a = sp.diags([np.ones(n - 1), np.full(n, 5.0), np.ones(n - 1)], [-1, 0, 1], format="csc")
+    pts = np.column_stack([np.cos(np.arange(n)), np.sin(np.arange(n))])  # far apart along it
+    solver = LDLT(points=lambda: pts[:, :1])
+    assert solver.symbolic(a).l_nnz <= n
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 60), reach=st.floats(0.0, 0.4),
+       shift=st.floats(-3.0, 3.0))  # fmt: skip
+def test_the_factor_in_the_dissections_order_solves_and_counts_the_inertia(seed, n, reach, shift):
+    """Whatever order is kept, the factor solves to round-off and its negative pivots are the
+    negative eigenvalues (Sylvester)."""
+    rng = np.random.default_rng(seed)
+    pts, pattern = _cloud_pattern(rng, n, 2, reach)
+    vals = rng.standard_normal(pattern.nnz)
+    a = sp.csc_matrix((vals, pattern.indices, pattern.indptr), shape=pattern.shape)
+    a = ((a + a.T) * 0.5 + sp.diags(np.full(2 * n, shift))).tocsc()
+    a.sort_indices()
+    f = LDLT(points=lambda: pts).factorize(a)
+    w = np.linalg.eigvalsh(a.toarray())
+    if np.min(np.abs(w)) < 1e-6:
+        return  # a near-singular draw: the count is not decided by round-off
+    assert f.negative == int(np.sum(w < 0))
+    b = rng.standard_normal(2 * n)
+    x = f.solve(b)
+    assert np.linalg.norm(a @ x - b) <= 1e-8 * np.linalg.norm(b) * np.linalg.cond(a.toarray())
+
+
+def test_points_that_do_not_hold_the_unknowns_are_refused_or_skipped():
+    a, pts = _grid(5)
+    with pytest.raises(ValueError, match="do not hold"):
+        nested_dissection(pts[:-1], a)
+    plain = LDLT().symbolic(a).perm
+    np.testing.assert_array_equal(LDLT(points=lambda: pts[:-1]).symbolic(a).perm, plain)
+    np.testing.assert_array_equal(LDLT(points=lambda: None).symbolic(a).perm, plain)
