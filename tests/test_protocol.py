@@ -963,6 +963,7 @@ def test_the_large_wire_options_start_above_a_thousand_segments(n_segments):
     large = n_segments > 1000
     assert kw["accurate_steps"] is large and kw["springs_from_segment"] is large
     assert kw["springs_solve_limit"] == (rx.SPRINGS_SOLVE_LIMIT if large else None)
+    assert kw["order_by_points"] is large
 
 
 def _contact_ramp():
@@ -980,6 +981,29 @@ def _assert_the_same_contact_equilibria(normal, other):
         assert not has_crossings(b.positions)
         assert b.energy.total == pytest.approx(a.energy.total, rel=1e-6)
     assert other.stages[-1].energy.hard_core > 0
+
+
+def test_contact_stages_reach_the_same_equilibria_in_the_nested_dissections_order(monkeypatch):
+    """Above ``relax.ORDER_BY_POINTS_ABOVE`` segments the factor's order is also sought by a
+    nested dissection of the nodes. Set to 0 (by default not at 60 segments), the dissection
+    is the order kept for some contact patterns, and the default wire reaches the same contact
+    equilibria, stable, without crossing: another order changes round-off only."""
+    import crumple.linalg as linalg_module
+    import crumple.relax as rx
+
+    wire, ramp, normal = _contact_ramp()
+    monkeypatch.setattr(rx, "ORDER_BY_POINTS_ABOVE", 0)
+    kept = []
+    original = linalg_module._Symbolic.__init__
+
+    def counted(self, a, candidate=None):
+        original(self, a, candidate)
+        kept.append(candidate is not None and self.perm is candidate)
+
+    monkeypatch.setattr(linalg_module._Symbolic, "__init__", counted)
+    ordered = run_ramp(wire, ramp, seed=1)
+    assert any(kept)
+    _assert_the_same_contact_equilibria(normal, ordered)
 
 
 def test_warm_started_springs_reach_the_same_contact_equilibria(monkeypatch):

@@ -87,6 +87,7 @@ def newton(
     springs_solve_limit: int | None = None,
     patience: int | None = None,
     cut: Callable[[np.ndarray, np.ndarray, float], float] | None = None,
+    order_by_points: bool = False,
 ) -> MinimizeResult:
     """Minimise ``fun`` by Newton's method: one sparse LDLᵀ per iteration, a trust radius.
 
@@ -238,6 +239,12 @@ def newton(
         0.8 t < s < t strictly, else 0.8 t. E.g. where the pairs that would touch at t are
         brought to the edge of the ``barriers`` listing, so that the next step's model sees
         them (:func:`crumple.geometry.approach_fraction`). The saddle escapes keep 0.8 t.
+    order_by_points : bool, optional
+        The rows of ``x`` (n, dim) are points in space, and an entry of the Hessian joins
+        points that are close: the factorisation's fill-reducing order is then also sought by
+        a nested dissection of the iterate's points (:class:`crumple.linalg.LDLT`), kept
+        where it gives the fewest nonzeros in L. A different order changes the iterates by
+        round-off only.
 
     Returns
     -------
@@ -283,7 +290,7 @@ def newton(
         if int(patience) < 1:
             raise ValueError(f"patience must be >= 1, got {patience!r}")
         patience, st.best = int(patience), st.e
-    ldl = LDLT()
+    ldl = LDLT(points=(lambda: st.x if st.x.ndim == 2 else None) if order_by_points else None)
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
     while True:

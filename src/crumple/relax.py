@@ -128,6 +128,13 @@ SPRINGS_SOLVE_LIMIT = 1000
 #: more springs' solves, the late stages' cost). Off: opt-in until a better springs' step.
 APPROACH_ABOVE: int | None = None
 APPROACH_SKIN = 0.5
+#: Above this many segments (None: never) the sparse factorisation's fill-reducing order is
+#: also sought by a nested dissection of the nodes' positions (``newton(order_by_points=True)``)
+#: and kept where its factor is the smallest. Why: a packed wire's Hessian couples nodes far
+#: apart along the chain, and reverse Cuthill–McKee's band then fills. Measured in
+#: docs/performance.md, "Nested dissection". Not below: the reproduction keeps its iterates
+#: (another order changes them by round-off).
+ORDER_BY_POINTS_ABOVE: int | None = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -315,6 +322,7 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         springs_from_segment=_above(wire, SEGMENT_START_ABOVE),
         springs_solve_limit=SPRINGS_SOLVE_LIMIT if _above(wire, SOLVE_LIMIT_ABOVE) else None,
         cut=cut,
+        order_by_points=_above(wire, ORDER_BY_POINTS_ABOVE),
     )
 
 
