@@ -15,7 +15,8 @@ The factorisation is the up-looking algorithm of QDLDL (Stellato, Banjac et al.,
 in Numba: an elimination tree and column counts once per sparsity pattern (the *symbolic*
 analysis), then a numeric factorisation per call that only fills in values. No pivoting: a
 fill-reducing order is chosen once per pattern, the one with the fewest nonzeros in L among
-the natural order (optimal for a chain: a band) and SciPy's reverse Cuthill–McKee.
+the natural order (optimal for a chain: a band), SciPy's reverse Cuthill–McKee and, where the
+caller gives the points the unknowns sit at, a nested dissection of them (a packed wire).
 
 A pattern is recognised by the identity of the CSC index arrays of the matrix (or, failing
 that, their contents), so a caller that assembles into a fixed pattern
