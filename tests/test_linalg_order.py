@@ -46,17 +46,28 @@ def test_the_order_is_a_permutation_keeping_each_points_unknowns_together(seed, 
 
 
 def _one_split(pts, node_pattern):
-    """The order of one dissection (a numpy reference): the points at or below the median of
-    the widest coordinate, less those joined to the others; the others; the separator."""
+    """One dissection (a NumPy reference): the masks of the points at or below the lower
+    median of the widest coordinate less those joined to the others, of the others, and of
+    the separator."""
     axis = int(np.argmax(np.ptp(pts, axis=0)))
-    lower = pts[:, axis] <= np.median(pts[:, axis])
+    lower = pts[:, axis] <= np.sort(pts[:, axis])[(len(pts) - 1) // 2]
     if lower.all():
         lower = np.arange(len(pts)) < len(pts) // 2
     joined = np.asarray((node_pattern[lower][:, ~lower] != 0).sum(axis=1)).ravel() > 0
     sep = np.zeros(len(pts), bool)
     sep[np.flatnonzero(lower)[joined]] = True
-    idx = np.arange(len(pts))
-    return np.concatenate([idx[lower & ~sep], idx[~lower], idx[sep]]), lower & ~sep, ~lower
+    return lower & ~sep, ~lower, sep
+
+
+def _reference_order(pts, node_pattern, leaf):
+    """The whole dissection, recursively, in NumPy: the points' order."""
+    if len(pts) <= leaf:
+        return np.arange(len(pts))
+    out = []
+    for mask in _one_split(pts, node_pattern)[:2]:
+        idx = np.flatnonzero(mask)
+        out.append(idx[_reference_order(pts[idx], node_pattern[idx][:, idx], leaf)])
+    return np.concatenate([*out, np.flatnonzero(_one_split(pts, node_pattern)[2])])
 
 
 @settings(max_examples=60, deadline=None)
@@ -66,10 +77,43 @@ def test_one_dissection_splits_at_the_median_with_the_joined_points_last(seed, n
     and no entry joins the two halves that precede the separator."""
     pts, a = _cloud_pattern(np.random.default_rng(seed), n, 2, reach)
     node = a[::2, ::2]
-    expected, low, up = _one_split(pts, node)
+    low, up, sep = _one_split(pts, node)
     order = nested_dissection(pts, a, leaf=n - 1)
-    np.testing.assert_array_equal(order[::2] // 2, expected)
+    idx = np.arange(n)
+    np.testing.assert_array_equal(order[::2] // 2, np.concatenate([idx[low], idx[up], idx[sep]]))
     assert node[low][:, up].nnz == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 150), dim=st.integers(1, 3),
+       leaf=st.integers(1, 12), reach=st.floats(0.0, 0.3), grid=st.booleans())  # fmt: skip
+def test_the_whole_dissection_is_the_recursive_reference(seed, n, dim, leaf, reach, grid):
+    """Every level, against a recursive NumPy reference, also with points on a coarse grid
+    (ties on the median, coincident points)."""
+    rng = np.random.default_rng(seed)
+    pts, a = _cloud_pattern(rng, n, dim, reach)
+    if grid:
+        pts = np.round(3.0 * pts) / 3.0
+    node = a[::dim, ::dim]
+    order = nested_dissection(pts, a, leaf=leaf)
+    np.testing.assert_array_equal(order[::dim] // dim, _reference_order(pts, node, leaf))
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1.7e308])
+def test_points_that_are_not_finite_are_refused_and_huge_ones_are_split(bad):
+    """A NaN or infinite coordinate is refused (and the LDLT then keeps its own orders); a
+    coordinate near the largest float still gives a permutation (the median is a point's own
+    coordinate, not an average that overflows)."""
+    pts, a = _cloud_pattern(np.random.default_rng(0), 40, 2, 0.2)
+    pts[::3, 0] = bad
+    pts[1::3, 0] = -bad
+    if np.isfinite(bad):
+        assert sorted(nested_dissection(pts, a).tolist()) == list(range(80))
+        return
+    with pytest.raises(ValueError, match="finite"):
+        nested_dissection(pts, a)
+    np.testing.assert_array_equal(LDLT(points=lambda: pts).symbolic(a).perm,
+                                  LDLT().symbolic(a).perm)  # fmt: skip
 
 
 def test_a_grid_fills_far_less_than_reverse_cuthill_mckee():

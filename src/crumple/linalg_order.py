@@ -89,16 +89,36 @@ ND_LEAF = 16
 
 
 def nested_dissection(points, a, leaf: int | None = None) -> np.ndarray:
-    """A nested-dissection order of the unknowns of the structurally symmetric pattern ``a``
-    (CSC arrays, both triangles), where unknown k belongs to point k // per of ``points``
-    (n_points, dim) and per = n_unknowns / n_points (a wire's nodes: their two coordinates).
+    """A nested-dissection order of the unknowns of a structurally symmetric pattern.
 
-    The points are split at the median of their widest coordinate; the points of the lower
-    half that share an entry with the upper half are the separator and go last, and each half
-    is ordered so in turn, down to ``leaf`` points (None: :data:`ND_LEAF`). This is George's
-    nested dissection with a geometric split, as in Miller, Teng, Thurston and Vavasis. As
-    for :func:`_rcm`, ``order[i]`` is the unknown that goes i-th.
+    The points are split at the lower median of their widest coordinate (or, where every
+    point is on it, by position); the points of the lower half that share an entry with the
+    upper half are the separator and go last, and each half is ordered so in turn, down to
+    ``leaf`` points: George's nested dissection with separators found by recursive coordinate
+    bisection. Within a leaf and a separator the unknowns keep their order.
 
+    Parameters
+    ----------
+    points : array_like, shape (n_points, dim)
+        The points the unknowns sit at, finite: unknown k belongs to point k // per, per =
+        n_unknowns / n_points (a wire's nodes: their two coordinates).
+    a : CSC matrix (SciPy or :class:`crumple.linalg.CSC`), shape (n_unknowns, n_unknowns)
+        The pattern, both triangles.
+    leaf : int, optional
+        The points below which a range is not split (None: :data:`ND_LEAF`).
+
+    Returns
+    -------
+    ndarray of int64
+        ``order[i]``, the unknown that goes i-th (as for :func:`_rcm`).
+
+    Raises
+    ------
+    ValueError
+        Where the points do not hold the unknowns, or are not finite.
+
+    Examples
+    --------
     >>> import scipy.sparse as sp
     >>> chain = sp.diags([1.0, 2.0, 1.0], [-1, 0, 1], shape=(8, 8), format="csc")
     >>> nested_dissection(np.arange(8.0)[:, None], chain, leaf=2).tolist()
@@ -107,6 +127,8 @@ def nested_dissection(points, a, leaf: int | None = None) -> np.ndarray:
     pts = np.ascontiguousarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[0] == 0 or a.shape[0] % pts.shape[0]:
         raise ValueError(f"points of shape {pts.shape} do not hold the {a.shape[0]} unknowns")
+    if not np.isfinite(pts).all():
+        raise ValueError("the points must be finite")
     per = a.shape[0] // pts.shape[0]
     gp, gv = _point_graph(pts.shape[0], per, np.asarray(a.indptr, dtype=np.int64),
                           np.asarray(a.indices, dtype=np.int64))  # fmt: skip
@@ -150,8 +172,7 @@ def _dissect(pts, gp, gv, leaf):
     while top > 0:
         top -= 1
         lo, hi = lo_stack[top], hi_stack[top]
-        if hi - lo <= leaf:
-            order[lo:hi] = np.sort(order[lo:hi])
+        if hi - lo <= leaf:  # ranges stay ascending: each split keeps the relative order
             continue
         axis, widest = 0, -1.0
         for d in range(pts.shape[1]):
@@ -164,7 +185,7 @@ def _dissect(pts, gp, gv, leaf):
         vals = np.empty(hi - lo)
         for i in range(lo, hi):
             vals[i - lo] = pts[order[i], axis]
-        med = np.median(vals)
+        med = np.sort(vals)[(hi - lo - 1) // 2]  # the lower median: a point's own coordinate
         c += 1
         lower = 0
         for i in range(lo, hi):
@@ -174,8 +195,8 @@ def _dissect(pts, gp, gv, leaf):
             else:
                 tag[order[i]] = 2 * c + 1
         if lower == hi - lo:  # every point on the median (a degenerate cloud): split the range
-            for i in range(lo + (hi - lo) // 2, hi):
-                tag[order[i]] = 2 * c + 1
+            for i in range(lo, hi):
+                tag[order[i]] = 2 * c + (i >= lo + (hi - lo) // 2)
         n_sep = 0
         for i in range(lo, hi):
             u = order[i]
@@ -204,7 +225,6 @@ def _dissect(pts, gp, gv, leaf):
                 tmp[ib] = u
                 ib += 1
         order[lo:hi] = tmp[lo:hi]
-        order[lo + n_low + n_up : hi] = np.sort(order[lo + n_low + n_up : hi])
         lo_stack[top], hi_stack[top] = lo, lo + n_low
         lo_stack[top + 1], hi_stack[top + 1] = lo + n_low, lo + n_low + n_up
         top += 2
