@@ -395,20 +395,27 @@ def _spring_model(dense, g, rows, offset, stiff, s):
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 12), m=st.integers(1, 6),
-       logk=st.floats(0.0, 7.0), shift=st.booleans(), from_segment=st.booleans())  # fmt: skip
+       logk=st.floats(0.0, 7.0), shift=st.booleans(), from_segment=st.booleans(),
+       updates=st.booleans())  # fmt: skip
 def test_refactorised_spring_step_is_the_minimiser_from_any_start(seed, n, m, logk, shift,
-                                                                  from_segment):  # fmt: skip
+                                                                  from_segment,
+                                                                  updates):  # fmt: skip
     """linalg_springs.spring_step (one factorisation of A + Σ_S k a aᵀ per round) finds the
     same minimiser as enumerating the active sets, from a random start, and never raises the
     model above its value at the start (monotone, so usable when it runs out of rounds); from
-    the start as given and from the segment's least point."""
+    the start as given and from the segment's least point; and with ``updates`` (every round
+    after the first modifying the last one's factor, ``UPDATE_COST`` = 0)."""
+    import crumple.linalg_springs as springs
+
     rng = np.random.default_rng(seed)
     csc, diag, dense, g, index, value, offset, stiff, rows = _spring_problem(rng, n, m, logk, shift)
     ldl = LDLT()
     ldl.factorize(csc, shift=diag)
     start = rng.standard_normal(n)
-    s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start,
-                              from_segment=from_segment)  # fmt: skip
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(springs, "UPDATE_COST", 0.0)
+        s, ok, used = spring_step(ldl, csc, diag, g, index, value, offset, stiff, start,
+                                  from_segment=from_segment, updates=updates)  # fmt: skip
     assert s is not None
     q0 = _spring_model(dense, g, rows, offset, stiff, start)
     assert _spring_model(dense, g, rows, offset, stiff, s) <= q0 + 1e-9 * (1 + abs(q0))

@@ -286,6 +286,7 @@ class _Symbolic:
     """A pattern's fill-reducing order, permuted upper pattern, elimination tree and L's shape."""
 
     def __init__(self, a: sp.csc_matrix, candidate=None):
+        # candidate: None or a permutation of range(n) (order[i], the unknown that goes i-th)
         n = a.shape[0]
         self.n = n
         self.indptr, self.indices = a.indptr, a.indices
@@ -477,6 +478,15 @@ class Factorization:
 class LDLT:
     """A reusable sparse LDLᵀ: the symbolic analysis is redone only when the pattern changes.
 
+    Parameters
+    ----------
+    points : callable, optional
+        ``points()`` gives the points the unknowns sit at when a pattern is analysed (an
+        array (n_points, dim), unknown k at row k // (n / n_points); None, or points that do
+        not hold the unknowns or are not finite: none). The fill-reducing order is then also
+        sought by a nested dissection of them
+        (:func:`crumple.linalg_order.nested_dissection`), kept where its L is smallest.
+
     Examples
     --------
     >>> a = sp.csc_matrix(np.array([[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]]))
@@ -485,11 +495,6 @@ class LDLT:
     (True, True)
     >>> LDLT().factorize(a, shift=np.full(3, -2.5)).negative    # eigenvalues 1.27, 3, 4.73
     1
-
-    ``points``, a callable, gives the points the unknowns sit at when a pattern is analysed
-    (an array (n_points, dim), unknown k at row k // (n / n_points); None: none). The
-    fill-reducing order is then also sought by a nested dissection of them
-    (:func:`crumple.linalg_order.nested_dissection`), kept where its L is smallest.
     """
 
     def __init__(self, points=None):
@@ -497,6 +502,7 @@ class LDLT:
         self._points = points
         self.analyses = 0
         self.factorizations = 0
+        self.modifications = 0  # rank-one modifications of a factor (crumple.linalg_update)
 
     def symbolic(self, a) -> _Symbolic:
         if self._sym is None or not self._sym.matches(a):
@@ -513,7 +519,8 @@ class LDLT:
         if self._points is None:
             return None
         pts = self._points()
-        if pts is None or np.ndim(pts) != 2 or len(pts) == 0 or a.shape[0] % len(pts):
+        if (pts is None or np.ndim(pts) != 2 or len(pts) == 0 or a.shape[0] == 0
+                or a.shape[0] % len(pts) or not np.isfinite(pts).all()):  # fmt: skip
             return None
         return nested_dissection(pts, a)
 

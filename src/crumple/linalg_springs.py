@@ -28,6 +28,12 @@ from numba import njit
 
 from .linalg import CSC, _csc_matvec
 from .linalg_solve import _row_dot, _row_positions
+from .linalg_update import factor_work, inverse_order, modified, path_work
+
+#: A round of the refactorised springs' step modifies the last round's factor (a rank-one
+#: update or downdate per spring that joined or left) where the entries of L those touch,
+#: times this, are fewer than the multiply-adds of a factorisation; else it factorises.
+UPDATE_COST = 4.0
 
 
 @njit(cache=True)
@@ -133,7 +139,7 @@ def _least_on_segment(s, a_mul, g, index, value, offset, stiff):
 
 
 def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=30,
-                from_segment=True):  # fmt: skip
+                from_segment=True, updates=False):  # fmt: skip
     """The minimiser of q (module docstring) by semismooth Newton from ``start``.
 
     ``ldl`` is the :class:`crumple.linalg.LDLT` that factorised A = ``a`` + diag(``shift``)
@@ -164,17 +170,24 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
     s = np.array(start, dtype=np.float64)
     if from_segment:
         s = _least_on_segment(s, a_mul, g, index, value, offset, stiff)
-    used = 0
+    used, f, last = 0, None, None
     for used in range(1, rounds + 1):
         u = _rows_dot(index, value, s)
         active = u < offset
         merged, ok = _with_springs(indptr, indices, data, index, value, stiff, active)
         if not ok:
             return None, False, used
-        f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
-        if f.negative:  # not with positive springs (A is); releasing ones can: no minimiser
-            return s, False, used
-        trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
+        f = _modified(ldl, f, last, index, value, stiff, active) if updates else None
+        if f is None:
+            f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
+            if f.negative:  # not with positive springs (A is); releasing ones can: no minimiser
+                return s, False, used
+            trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
+        else:  # one refinement against the matrix itself: the modifications' round-off
+            rhs = _spring_rhs(-g, index, value, offset, stiff, active)
+            trial = f.solve(rhs)
+            trial += f.solve(rhs - _csc_matvec(indptr, indices, merged, trial) - sh * trial)
+        last = active
         if np.array_equal(_rows_dot(index, value, trial) < offset, active):
             return trial, True, used
         d = trial - s
@@ -185,6 +198,25 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
             break
         s = s + t * d
     return s, False, used
+
+
+def _modified(ldl, f, last, index, value, stiff, active):
+    """The factor of the round's matrix from the last round's ``f`` (active set ``last``) by a
+    rank-one modification per spring that joined or left (:mod:`crumple.linalg_update`), where
+    that is cheaper than a factorisation; None: factorise."""
+    if f is None:
+        return None
+    change = active != last
+    if not change.any():
+        return f
+    sym = f._sym
+    first = inverse_order(sym)[index[change]].min(axis=1)  # where each one's path starts
+    if path_work(sym)[first].sum() * UPDATE_COST > factor_work(sym):
+        return None
+    out = modified(f, index, value, np.where(active, stiff, -stiff), change)
+    if out is not None:
+        ldl.modifications += int(change.sum())
+    return out
 
 
 def new_rows(old, new):

@@ -84,6 +84,7 @@ def newton(
     shift_descents: int | None = None,
     accurate_steps: bool = False,
     springs_from_segment: bool = False,
+    springs_updates: bool = False,
     springs_solve_limit: int | None = None,
     patience: int | None = None,
     cut: Callable[[np.ndarray, np.ndarray, float], float] | None = None,
@@ -223,6 +224,11 @@ def newton(
         the segment from x to the point the solve reached, where the model is lower there,
         instead of that point (``from_segment``). Off by default
         (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
+    springs_updates : bool
+        A round of the refactorised step modifies the last round's factor, a rank-one update
+        or downdate per spring that joined or left (``crumple.linalg_update``), where that
+        touches fewer entries of L than a factorisation costs (``updates``). Off by default
+        (``crumple.relax.minimize_wire`` turns it on above 10³ segments).
     springs_solve_limit : int, optional
         Where more springs than this are listed, the springs' step skips the solve with the
         factor (one solve per spring that joins, two joining a round: it runs out of rounds
@@ -243,8 +249,8 @@ def newton(
         The rows of ``x`` (n, dim) are points in space, and an entry of the Hessian joins
         points that are close: the factorisation's fill-reducing order is then also sought by
         a nested dissection of the iterate's points (:class:`crumple.linalg.LDLT`), kept
-        where it gives the fewest nonzeros in L. A different order changes the iterates by
-        round-off only.
+        where it gives the fewest nonzeros in L. A different order changes the iterates: by
+        round-off, and through it the pivot tests near their thresholds.
 
     Returns
     -------
@@ -282,6 +288,7 @@ def newton(
     st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
     st.accurate_steps = bool(accurate_steps)
     st.springs_from_segment = bool(springs_from_segment)
+    st.springs_updates = bool(springs_updates)
     if springs_solve_limit is not None and int(springs_solve_limit) < 0:
         raise ValueError(f"springs_solve_limit must be >= 0 or None, got {springs_solve_limit!r}")
     st.springs_solve_limit = None if springs_solve_limit is None else int(springs_solve_limit)

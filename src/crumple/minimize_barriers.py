@@ -104,7 +104,8 @@ def _spring_model_step(st, p, rows, ldl, start=None, last=None):
             return None, None
         first = s if all_finite(s) else p.ravel()
         s, _, _ = spring_step(ldl, *st.model, st.g.ravel(), index, value, offset, stiff, first,
-                              from_segment=st.springs_from_segment)  # fmt: skip
+                              from_segment=st.springs_from_segment,
+                              updates=st.springs_updates)  # fmt: skip
         active = None if s is None or not WARM_START else _rows_dot(index, value, s) < offset
     return s, active
 

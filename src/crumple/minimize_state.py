@@ -47,6 +47,7 @@ class _State:
     krylov: int = 0  # conjugate-gradient iterations of the accurate steps (minimize_krylov)
     accurate_steps: bool = False  # newton(accurate_steps=...)
     springs_from_segment: bool = False  # newton(springs_from_segment=...)
+    springs_updates: bool = False  # newton(springs_updates=...)
     springs_solve_limit: int | None = None  # newton(springs_solve_limit=...)
     cut: Callable | None = None  # newton(cut=...)
     springs: tuple | None = None  # the rows of the last springs' step (minimize_barriers)

@@ -135,6 +135,13 @@ APPROACH_SKIN = 0.5
 #: docs/performance.md, "Nested dissection". Not below: the reproduction keeps its iterates
 #: (another order changes them by round-off).
 ORDER_BY_POINTS_ABOVE: int | None = 1000
+#: Above this many segments (None: never) a round of the refactorised springs' step modifies
+#: the last round's factor, a rank-one update or downdate per spring that joined or left,
+#: where that is cheaper than a factorisation (``newton(springs_updates=True)``,
+#: :mod:`crumple.linalg_update`). Why: a round changes a few springs of thousands, and
+#: refactorised the whole matrix for them. Measured in docs/performance.md, "Rank-one
+#: modifications". Not below: the reproduction keeps its iterates.
+UPDATES_ABOVE: int | None = 1000
 
 Method = Literal["newton", "powell"]
 
@@ -320,6 +327,7 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
         retract=_curved_retraction(energy) if curved else None,
         accurate_steps=wire.n_segments > ACCURATE_STEPS_ABOVE,
         springs_from_segment=_above(wire, SEGMENT_START_ABOVE),
+        springs_updates=_above(wire, UPDATES_ABOVE),
         springs_solve_limit=SPRINGS_SOLVE_LIMIT if _above(wire, SOLVE_LIMIT_ABOVE) else None,
         cut=cut,
         order_by_points=_above(wire, ORDER_BY_POINTS_ABOVE),
