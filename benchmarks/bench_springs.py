@@ -1,6 +1,7 @@
 """The refactorised springs' step replayed on the calls of one contact stage, each way.
 
     python benchmarks/bench_springs.py N K DIR [every=2] [calls=40] [curved=on|off]
+                                       [compare=segment|updates]
 
 re-minimises stage K (1-based) of the default schedule at N segments from the positions of
 stage K - 1 that ``bench_scale.py scale N save=DIR`` wrote, keeps the inputs of every
@@ -10,6 +11,11 @@ rounds started from the start as given, or from the least point of q on the segm
 it). The stage's path sets which calls are met; the replay compares the two ways on the same
 calls: rounds (one factorisation each), minimisers found, q reached, CPU. Counts are
 deterministic; the CPU is this machine's.
+
+With ``compare=updates`` each kept call is solved from the segment (the default) in the
+factor's order the engine used, without and with the rank-one modifications of the last
+round's factor (``spring_step(updates=...)``, :mod:`crumple.linalg_update`): rounds,
+factorisations, modifications, minimisers found, q reached, CPU.
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ def kept_calls(n, k, save, every, limit, curved):
         if seen[0] % every == 0 and len(kept) < limit:
             kept.append(tuple(np.array(v, copy=True) if v is not None else None
                               for v in (a.data, a.indices, a.indptr, shift, g, index, value,
-                                        offset, stiff, start)))  # fmt: skip
+                                        offset, stiff, start, ldl._sym.perm)))  # fmt: skip
         seen[0] += 1
         return step(ldl, a, shift, g, index, value, offset, stiff, start, **kw)
 
@@ -62,23 +68,45 @@ def kept_calls(n, k, save, every, limit, curved):
 
 def model_value(call, s):
     """q(s) of a kept call."""
-    data, indices, indptr, shift, g, index, value, offset, stiff, _ = call
+    data, indices, indptr, shift, g, index, value, offset, stiff, _, _ = call
     a_s = _csc_matvec(indptr, indices, data, s) + (0.0 if shift is None else shift * s)
     gap = np.maximum(0.0, offset - linalg_springs._rows_dot(index, value, s))
     return float(g @ s + 0.5 * s @ a_s + 0.5 * np.sum(stiff * gap**2))
 
 
-def replay(call, from_segment):
-    """One kept call solved again: (rounds, converged, q(s) - q(start), CPU s)."""
-    data, indices, indptr, shift, g, index, value, offset, stiff, start = call
+def replay(call, from_segment, updates=False):
+    """One kept call solved again, in the factor's order the engine used: (rounds, converged,
+    q(s) - q(start), CPU s, factorisations, rank-one modifications)."""
+    data, indices, indptr, shift, g, index, value, offset, stiff, start, perm = call
     ldl = LDLT()
+    ldl._candidate = lambda a: perm  # the engine's order, whatever chose it
     t0 = time.process_time()
     s, ok, used = linalg_springs.spring_step(ldl, CSC(data, indices, indptr), shift, g, index,
                                              value, offset, stiff, start,
-                                             from_segment=from_segment)  # fmt: skip
+                                             from_segment=from_segment,
+                                             updates=updates)  # fmt: skip
     t = time.process_time() - t0
     dq = np.nan if s is None else model_value(call, s) - model_value(call, start)
-    return used, bool(ok), dq, t
+    return used, bool(ok), dq, t, ldl.factorizations, ldl.modifications
+
+
+def compare_updates(calls):
+    """Each call from the segment, without and with the modifications of the last round's
+    factor: the totals."""
+    print("  call | springs | without: rounds, factorisations, found | with: rounds, "
+          "factorisations, modifications, found")  # fmt: skip
+    total = {False: np.zeros(6), True: np.zeros(6)}
+    for i, call in enumerate(calls):
+        got = {way: replay(call, True, way) for way in (False, True)}
+        low = min(got[w][2] for w in got)
+        for way, (used, ok, dq, t, nf, nm) in got.items():
+            total[way] += (used, ok, dq <= low + 1e-10 * max(1.0, abs(low)), t, nf, nm)
+        print(f"  {i} | {len(call[7])} | {got[False][0]}, {got[False][4]}, {got[False][1]} | "
+              f"{got[True][0]}, {got[True][4]}, {got[True][5]}, {got[True][1]}")  # fmt: skip
+    for way, (rounds, found, lowest, t, nf, nm) in total.items():
+        print(f"  updates={way}: {rounds:.0f} rounds, {nf:.0f} factorisations, {nm:.0f} "
+              f"modifications, active set found in {found:.0f}/{len(calls)}, q lowest (to "
+              f"1e-10) in {lowest:.0f}, {t:.1f} s CPU")  # fmt: skip
 
 
 def main(argv):
@@ -88,13 +116,16 @@ def main(argv):
     with threadpool_limits(limits=1, user_api="blas"):
         calls = kept_calls(int(n), int(k), save, int(flags.get("every", 2)),
                            int(flags.get("calls", 40)), curved)  # fmt: skip
+        if flags.get("compare", "segment") == "updates":
+            compare_updates(calls)
+            return
         print("  call | springs | off: rounds, found, q - q(start) | on: rounds, found, "
               "q - q(start)")  # fmt: skip
         total = {False: [0, 0, 0.0, 0], True: [0, 0, 0.0, 0]}
         for i, call in enumerate(calls):
             got = {way: replay(call, way) for way in (False, True)}
             low = min(got[w][2] for w in got)
-            for way, (used, ok, dq, t) in got.items():
+            for way, (used, ok, dq, t, _, _) in got.items():
                 c = total[way]
                 c[0], c[1], c[2] = c[0] + used, c[1] + ok, c[2] + t
                 c[3] += dq <= low + 1e-12 * max(1.0, abs(low))
