@@ -150,3 +150,73 @@ def test_the_cost_rule_chooses_between_modifying_and_factorising(monkeypatch, co
                               np.ones(n), updates=True)  # fmt: skip
     assert ok and used == 4
     assert (ldl.factorizations, ldl.modifications) == ((1, 3) if cost == 0.0 else (4, 0))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 30), m=st.integers(1, 6),
+       logk=st.floats(0.0, 2.0))  # fmt: skip
+def test_releasing_springs_are_modified_as_the_matrix_or_refused_where_it_is_not_definite(
+    seed, n, m, logk
+):
+    """Springs of negative stiffness (releasing rows) joining and leaving: where the modified
+    matrix is positive definite the modification solves it (or is refused only for a
+    cancelled pivot); where it is not, the modification is refused."""
+    rng = np.random.default_rng(seed)
+    a, pattern, index, value, stiff, rows = _problem(rng, n, m, logk)
+    stiff = stiff * rng.choice([-1.0, 1.0], m)
+    s0, s1 = rng.random(m) < 0.5, rng.random(m) < 0.5
+
+    def matrix(s):
+        return a + (rows[s].T * stiff[s]) @ rows[s]
+
+    if np.linalg.eigvalsh(matrix(s0)).min() <= 1e-6:
+        return  # the factor to modify must be of a positive definite matrix
+    f1 = modified(_factor(pattern, matrix(s0)), index, value, np.where(s1, stiff, -stiff),
+                  s0 != s1)  # fmt: skip
+    if np.linalg.eigvalsh(matrix(s1)).min() <= 0.0:
+        assert f1 is None
+    elif f1 is not None:
+        b = rng.standard_normal(n)
+        want = np.linalg.solve(matrix(s1), b)
+        cond = max(np.linalg.cond(matrix(s0)), np.linalg.cond(matrix(s1)))
+        assert np.linalg.norm(f1.solve(b) - want) <= 1e-10 * cond * np.linalg.norm(want)
+
+
+def test_a_row_off_the_pattern_is_refused_and_leaves_the_work_clean():
+    """Two blocks with no entry between them: a row across both is refused; the next, inside
+    one block, is modified exactly (the work vector was left at zero)."""
+    a = np.kron(np.eye(2), np.array([[4.0, 1.0], [1.0, 4.0]]))
+    pattern = sp.csc_matrix((np.abs(a) > 0).astype(float))
+    f = _factor(pattern, a)
+    index, value = np.array([[0, 3], [0, 1]]), np.array([[1.0, 1.0], [1.0, -2.0]])
+    assert modified(f, index, value, np.array([1.0, 1.0]), np.array([True, False])) is None
+    g = modified(f, index, value, np.array([1.0, 3.0]), np.array([False, True]))
+    u = np.array([1.0, -2.0, 0.0, 0.0])
+    b = np.arange(1.0, 5.0)
+    np.testing.assert_allclose(g.solve(b), np.linalg.solve(a + 3.0 * np.outer(u, u), b),
+                               rtol=1e-13)  # fmt: skip
+
+
+@pytest.mark.parametrize("k", [1e3, 3e5, 1e7])
+def test_a_stiff_spring_leaving_is_downdated_and_refined_or_refused(monkeypatch, k):
+    """Model I / 3, g = (1, 0.3), one spring holding x_0 <= 0.5, active at the start (1, 0)
+    and not at the minimiser (-3, -0.9). The second round downdates it: its pivot 1/3 + k
+    falls back to 1/3 with the round-off of 1/3 + k (k ε; 2 × 10⁻¹⁰ at k = 3 × 10⁵ unrefined),
+    which the refinement against the matrix removes; at k = 10⁷ the pivot keeps less than
+    ``CANCELLATION`` of its value and the round factorises instead. Either way the step of
+    the rounds factorised afresh, to round-off."""
+    monkeypatch.setattr(linalg_springs, "UPDATE_COST", 0.0)
+    out = {}
+    for updates in (False, True):
+        third = sp.csc_matrix(np.eye(2) / 3.0)
+        ldl = LDLT()
+        s, ok, used = spring_step(ldl, CSC(third.data.copy(), third.indices, third.indptr),
+                                  None, np.array([1.0, 0.3]), np.array([[0]]),
+                                  np.array([[-1.0]]), np.array([-0.5]), np.array([k]),
+                                  np.array([1.0, 0.0]), from_segment=False,
+                                  updates=updates)  # fmt: skip
+        assert ok and used == 2
+        out[updates] = s, ldl.modifications
+    np.testing.assert_allclose(out[True][0], out[False][0], rtol=1e-14)
+    np.testing.assert_allclose(out[False][0], [-3.0, -0.9], rtol=1e-14)
+    assert out[True][1] == (0 if k > 1e6 else 1)

@@ -15,7 +15,10 @@ which each round factorises A + Σ_S k_i a_i a_iᵀ for the springs S active at 
 to the minimiser of that quadratic, or to the minimiser of q on the way there (an exact line
 search: q is convex along any line, its derivative piecewise linear and nondecreasing). q falls
 at every round, and a round whose solution has the active set it was computed with has found
-the exact minimiser. The cost of a round does not depend on how many springs are active.
+the exact minimiser. The cost of a round does not depend on how many springs are active. With
+``updates``, a round after the first modifies the last round's factor instead, a rank-one
+update or downdate per spring that joined or left (:mod:`crumple.linalg_update`), where that
+is the cheaper.
 All of this is for springs of positive stiffness. A spring of negative stiffness (a releasing
 row, :meth:`crumple.energy.WireEnergy.barriers`) can make q non-convex: a round whose
 A + Σ_S k_i a_i a_iᵀ has a negative pivot then stops, not converged, at its start.
@@ -159,6 +162,12 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
     then add them again, a few a round. Measured on the calls of contact stages replayed both
     ways (``benchmarks/bench_springs.py``; docs/performance.md, "The refactorised springs'
     step from the segment's least point").
+
+    With ``updates`` a round after the first modifies the last round's factor, one rank-one
+    update or downdate per spring that joined or left (:func:`_modified`), where the entries
+    of L that touches, times :data:`UPDATE_COST`, are fewer than a factorisation's work, and
+    solves with it refined once against the round's matrix; else, or where a modification is
+    refused, it factorises. Measured in docs/performance.md, "Rank-one modifications".
     """
     indptr, indices = a.indptr, a.indices
     data = np.ascontiguousarray(a.data, dtype=np.float64)

@@ -8,9 +8,11 @@ rank-one update (σ = k_i > 0) or downdate (σ = -k_i) of the factor in place. M
 Golub, Murray and Saunders (Math. Comp. 28, 1974), on the sparse factor as in Davis and Hager
 (SIAM J. Matrix Anal. Appl. 20, 1999): only the columns on the path of the elimination tree
 from the first nonzero of P w to the root change, at a cost of their entries, against the
-whole factorisation's Σ_j nnz(L_{:j})². A pivot that a modification takes to zero or below
-(a downdate that leaves the matrix indefinite, or round-off) is refused: the caller then
-factorises afresh.
+whole factorisation's work, about Σ_j nnz(L_{:j})². A pivot that a modification takes to zero
+or below (a downdate that leaves the matrix indefinite, or round-off), or below
+:data:`CANCELLATION` of its value (a downdate that cancels most of a pivot keeps the
+round-off of the larger one), is refused, as is a row whose entries do not lie on one path of
+the tree: the caller then factorises afresh.
 """
 
 from __future__ import annotations
@@ -20,12 +22,19 @@ from numba import njit
 
 from .linalg import Factorization
 
+#: A modification that leaves a pivot below this fraction of its value is refused: the pivot's
+#: round-off is that of the value before, so the digits it cancels are lost (a stiff spring
+#: downdated from the pivot it dominated).
+CANCELLATION = 1e-6
+
 
 @njit(cache=True)
-def _modify(lp, li, lx, d, parent, pinv, index, value, sigma, w):
+def _modify(lp, li, lx, d, parent, pinv, index, value, sigma, w, cancellation):
     """L D Lᵀ + σ w wᵀ in place, w the row with entries ``value`` at ``index`` (unknowns in
     the original order; ``pinv`` maps them to the factor's). ``w`` a work vector of zeros,
-    left so. False (the factor then unusable) where a pivot falls to zero or below."""
+    left so. False (the factor then unusable) where a pivot falls to zero or below, or below
+    ``cancellation`` of its value, or where an entry of the row is off the tree's path from
+    its first one (outside the pattern)."""
     start = -1
     for c in range(index.shape[0]):
         if value[c] != 0.0:
@@ -42,7 +51,7 @@ def _modify(lp, li, lx, d, parent, pinv, index, value, sigma, w):
         if p != 0.0 and ok:
             dj = d[j]
             bar = dj + alpha * p * p
-            if not bar > 0.0:
+            if not bar > cancellation * dj:
                 ok = False
             else:
                 beta = p * alpha / bar
@@ -53,15 +62,37 @@ def _modify(lp, li, lx, d, parent, pinv, index, value, sigma, w):
                     w[i] -= p * lx[q]
                     lx[q] += beta * w[i]
         j = parent[j]
+    for c in range(index.shape[0]):  # an entry off the path was never reached: left in w
+        j = pinv[index[c]]
+        if w[j] != 0.0:
+            w[j] = 0.0
+            ok = False
     return ok
 
 
 def modified(f: Factorization, index, value, sigma, chosen) -> Factorization | None:
-    """A new factor of (f's matrix) + Σ_i σ_i a_i a_iᵀ over the rows i of ``chosen`` (a boolean
-    mask; a_i with entries ``value[i]`` at ``index[i]``), f left as it was; None where a
-    modification drops a pivot to zero or below, or f is not a complete factor of a matrix
-    (a modified or trial one). The caller guarantees that every a_i a_iᵀ lies in the factored
-    pattern (:func:`crumple.linalg_springs._with_springs` checks it)."""
+    """The factor of (f's matrix) + Σ_i σ_i a_i a_iᵀ over the chosen rows, f left as it was.
+
+    Parameters
+    ----------
+    f : Factorization
+        A complete factor of a positive definite matrix (not modified, not a trial, no
+        negative pivot); else None is returned.
+    index, value : ndarray, shape (m, w)
+        Row i, a_i, has entries ``value[i]`` at ``index[i]`` (unknowns in the original order);
+        every a_i a_iᵀ of a chosen row must lie in the factored pattern
+        (:func:`crumple.linalg_springs._with_springs` checks it; a row off it is refused).
+    sigma : ndarray, shape (m,)
+        σ_i: a spring's stiffness to add it, minus it to take it out.
+    chosen : ndarray of bool, shape (m,)
+        The rows applied, in order.
+
+    Returns
+    -------
+    Factorization or None
+        The modified factor; None where a modification is refused (a pivot at or below
+        :data:`CANCELLATION` of its value: indefinite, or cancelled to round-off).
+    """
     if f.modified or not f.complete or f.negative:
         return None
     sym = f._sym
@@ -70,7 +101,7 @@ def modified(f: Factorization, index, value, sigma, chosen) -> Factorization | N
     w = np.zeros(sym.n)
     for i in np.flatnonzero(chosen):
         if not _modify(sym.lp, sym.ai_l, lx, d, sym.parent, pinv, index[i], value[i],
-                       float(sigma[i]), w):  # fmt: skip
+                       float(sigma[i]), w, CANCELLATION):  # fmt: skip
             return None
     out = Factorization(sym, lx, d, 0, 0)
     out.first_modified = -1  # no pivot raised, as LDLT.factorize sets it
@@ -88,8 +119,8 @@ def inverse_order(sym) -> np.ndarray:
 
 
 def factor_work(sym) -> float:
-    """A numeric factorisation's work on the pattern, Σ_j (nnz(L_{:j}) + 1)²: its
-    multiply-adds, each column's pivot counted as an entry."""
+    """A numeric factorisation's work on the pattern, Σ_j (nnz(L_{:j}) + 1)²: a measure
+    (about twice its multiply-adds), each column's pivot counted as an entry."""
     work = getattr(sym, "factor_work", None)
     if work is None:
         lnz = np.diff(sym.lp).astype(np.float64) + 1.0
