@@ -14,9 +14,10 @@ factorisation and of a solve (the least of ``repeat``). Counts are deterministic
 this machine's, both orders measured in the same process.
 
 ``path`` re-minimises stage K from DIR's stage K - 1 in RCM's order (the nested dissection
-and the rank-one modifications off), and does every factorisation and solve a second time in the order kept with the nodes'
-positions: the CPU of both along the same path (a different order would change the path by
-round-off, and a late stage's path at N = 10⁵ is chaotic). Results in docs/performance.md,
+and the rank-one modifications off), and does every factorisation and solve a second time
+in the order kept with the nodes' positions: the CPU of both along the same path (a
+different order would change the path by round-off, and a late stage's path at N = 10⁵ is
+chaotic). Results in docs/performance.md,
 "Nested dissection".
 """
 
