@@ -35,7 +35,8 @@ from .linalg_update import factor_work, inverse_order, modified, path_work
 
 #: A round of the refactorised springs' step modifies the last round's factor (a rank-one
 #: update or downdate per spring that joined or left) where the entries of L those touch,
-#: times this, are fewer than the multiply-adds of a factorisation; else it factorises.
+#: times this, are fewer than a factorisation's work (``linalg_update.factor_work``); else it
+#: factorises.
 UPDATE_COST = 4.0
 
 
@@ -187,14 +188,14 @@ def spring_step(ldl, a, shift, g, index, value, offset, stiff, start, *, rounds=
         if not ok:
             return None, False, used
         f = _modified(ldl, f, last, index, value, stiff, active) if updates else None
-        if f is None:
+        fresh = f is None
+        if fresh:
             f = ldl.factorize(CSC(merged, indices, indptr), shift=shift)
             if f.negative:  # not with positive springs (A is); releasing ones can: no minimiser
                 return s, False, used
-            trial = f.solve(_spring_rhs(-g, index, value, offset, stiff, active))
-        else:  # one refinement against the matrix itself: the modifications' round-off
-            rhs = _spring_rhs(-g, index, value, offset, stiff, active)
-            trial = f.solve(rhs)
+        rhs = _spring_rhs(-g, index, value, offset, stiff, active)
+        trial = f.solve(rhs)
+        if not fresh:  # one refinement against the matrix itself: the modifications' round-off
             trial += f.solve(rhs - _csc_matvec(indptr, indices, merged, trial) - sh * trial)
         last = active
         if np.array_equal(_rows_dot(index, value, trial) < offset, active):

@@ -138,7 +138,7 @@ ORDER_BY_POINTS_ABOVE: int | None = 1000
 #: Above this many segments (None: never) a round of the refactorised springs' step modifies
 #: the last round's factor, a rank-one update or downdate per spring that joined or left,
 #: where that is cheaper than a factorisation (``newton(springs_updates=True)``,
-#: :mod:`crumple.linalg_update`). Why: a round changes a few springs of thousands, and
+#: :mod:`crumple.linalg_update`). Why: a round changes some springs of thousands listed, and
 #: refactorised the whole matrix for them. Measured in docs/performance.md, "Rank-one
 #: modifications". Not below: the reproduction keeps its iterates.
 UPDATES_ABOVE: int | None = 1000
