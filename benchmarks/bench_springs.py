@@ -1,7 +1,8 @@
 """The refactorised springs' step replayed on the calls of one contact stage, each way.
 
     python benchmarks/bench_springs.py N K DIR [every=2] [calls=40] [curved=on|off]
-                                       [compare=segment|updates]
+                                       [compare=segment|updates|ends] [keep=CALLS]
+    python benchmarks/bench_springs.py replay CALLS [compare=segment|updates|ends]
 
 re-minimises stage K (1-based) of the default schedule at N segments from the positions of
 stage K - 1 that ``bench_scale.py scale N save=DIR`` wrote, keeps the inputs of every
@@ -66,6 +67,44 @@ def kept_calls(n, k, save, every, limit, curved):
     return kept
 
 
+_FIELDS = "data indices indptr shift g index value offset stiff start perm".split()
+
+
+def write_calls(calls, folder):
+    """The kept calls as ``folder/call###.npz`` (a missing shift stored as an empty array)."""
+    os.makedirs(folder, exist_ok=True)
+    for i, call in enumerate(calls):
+        arrays = {f: np.empty(0) if v is None else v for f, v in zip(_FIELDS, call, strict=True)}
+        np.savez(os.path.join(folder, f"call{i:03d}.npz"), has_shift=call[3] is not None, **arrays)
+
+
+def read_calls(folder):
+    """The calls :func:`write_calls` wrote, in order."""
+    calls = []
+    names = sorted(f for f in os.listdir(folder) if f.startswith("call") and f.endswith(".npz"))
+    for name in names:
+        with np.load(os.path.join(folder, name), allow_pickle=False) as z:
+            call = [z[f] for f in _FIELDS]
+            if not bool(z["has_shift"]):
+                call[3] = None
+        calls.append(tuple(call))
+    print(f"== {len(calls)} calls read from {folder} ==")
+    return calls
+
+
+def count_ends(calls, rounds=30):
+    """Each call as the engine solves it above 10³ segments: how it ended."""
+    ends = {"found": 0, "rounds run out": 0, "stopped before": 0}
+    total, cpu = 0, 0.0
+    for call in calls:
+        used, ok, _, t, _, _ = replay(call, True, True)
+        total, cpu = total + used, cpu + t
+        ends["found" if ok else "rounds run out" if used >= rounds else "stopped before"] += 1
+    with_releasing = sum(bool((call[8] < 0).any()) for call in calls)
+    print(f"  {len(calls)} calls ({with_releasing} with releasing springs), {total} rounds, "
+          f"{cpu:.1f} s CPU: " + ", ".join(f"{k} {v}" for k, v in ends.items()))  # fmt: skip
+
+
 def model_value(call, s):
     """q(s) of a kept call."""
     data, indices, indptr, shift, g, index, value, offset, stiff, _, _ = call
@@ -111,28 +150,42 @@ def compare_updates(calls):
 
 def main(argv):
     flags = dict(a.split("=") for a in argv if "=" in a)
-    n, k, save = (v for v in argv if "=" not in v)
+    args = [v for v in argv if "=" not in v]
     curved = {"on": True, "off": False, None: None}[flags.get("curved")]
     with threadpool_limits(limits=1, user_api="blas"):
-        calls = kept_calls(int(n), int(k), save, int(flags.get("every", 2)),
-                           int(flags.get("calls", 40)), curved)  # fmt: skip
-        if flags.get("compare", "segment") == "updates":
+        if args[0] == "replay":
+            calls = read_calls(args[1])
+        else:
+            n, k, save = args
+            calls = kept_calls(int(n), int(k), save, int(flags.get("every", 2)),
+                               int(flags.get("calls", 40)), curved)  # fmt: skip
+            if "keep" in flags:
+                write_calls(calls, flags["keep"])
+        compare = flags.get("compare", "segment")
+        if compare == "updates":
             compare_updates(calls)
-            return
-        print("  call | springs | off: rounds, found, q - q(start) | on: rounds, found, "
-              "q - q(start)")  # fmt: skip
-        total = {False: [0, 0, 0.0, 0], True: [0, 0, 0.0, 0]}
-        for i, call in enumerate(calls):
-            got = {way: replay(call, way) for way in (False, True)}
-            low = min(got[w][2] for w in got)
-            for way, (used, ok, dq, t, _, _) in got.items():
-                c = total[way]
-                c[0], c[1], c[2] = c[0] + used, c[1] + ok, c[2] + t
-                c[3] += dq <= low + 1e-12 * max(1.0, abs(low))
-            print(
-                f"  {i} | {len(call[7])} | {got[False][0]}, {got[False][1]}, "
-                f"{got[False][2]:.3e} | {got[True][0]}, {got[True][1]}, {got[True][2]:.3e}"
-            )
+        elif compare == "ends":
+            count_ends(calls)
+        else:
+            compare_segment(calls)
+
+
+def compare_segment(calls):
+    """Each call with ``from_segment`` off and on: the totals."""
+    print("  call | springs | off: rounds, found, q - q(start) | on: rounds, found, "
+          "q - q(start)")  # fmt: skip
+    total = {False: [0, 0, 0.0, 0], True: [0, 0, 0.0, 0]}
+    for i, call in enumerate(calls):
+        got = {way: replay(call, way) for way in (False, True)}
+        low = min(got[w][2] for w in got)
+        for way, (used, ok, dq, t, _, _) in got.items():
+            c = total[way]
+            c[0], c[1], c[2] = c[0] + used, c[1] + ok, c[2] + t
+            c[3] += dq <= low + 1e-12 * max(1.0, abs(low))
+        print(
+            f"  {i} | {len(call[7])} | {got[False][0]}, {got[False][1]}, "
+            f"{got[False][2]:.3e} | {got[True][0]}, {got[True][1]}, {got[True][2]:.3e}"
+        )
     for way, (rounds, found, t, lowest) in total.items():
         print(f"  from_segment={way}: {rounds} rounds, active set found in {found}/{len(calls)}, "
               f"q lowest (to 1e-12) in {lowest}, {t:.1f} s CPU")  # fmt: skip
