@@ -421,7 +421,9 @@ class Factorization:
         returns ``(s, converged, active)``, ``active`` the mask of the springs active at s.
         The columns A⁻¹a_i solved are kept with the factor: a later call with some of the same
         springs (rows of ``index`` and ``value`` equal, as a relisting of a step's springs
-        gives) reuses them, bit for bit.
+        gives) reuses them, bit for bit. Where the springs' small system is singular in
+        floating point (A⁻¹ dwarfing 1/k, as with a factor whose pivots were raised), it
+        returns p0, not converged.
 
         >>> f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
         >>> s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0]]), np.array([[-1.0]]),
@@ -438,13 +440,17 @@ class Factorization:
         index = np.ascontiguousarray(index, dtype=np.int64)
         value = np.ascontiguousarray(value, dtype=np.float64)
         known_slot, known_cols = self._known_columns(index, value)
-        s, converged, active, slot, cols = _spring_solve(
-            sym.n, sym.lp, sym.ai_l, self._lx, self._d, sym.perm,
-            np.ascontiguousarray(p0, dtype=np.float64).ravel(), index, value,
-            np.ascontiguousarray(offset, dtype=np.float64),
-            np.ascontiguousarray(stiffness, dtype=np.float64), int(rounds), float(window),
-            int(max_new), np.ascontiguousarray(first), known_slot, known_cols,
-        )  # fmt: skip
+        p0 = np.ascontiguousarray(p0, dtype=np.float64).ravel()
+        try:
+            s, converged, active, slot, cols = _spring_solve(
+                sym.n, sym.lp, sym.ai_l, self._lx, self._d, sym.perm, p0, index, value,
+                np.ascontiguousarray(offset, dtype=np.float64),
+                np.ascontiguousarray(stiffness, dtype=np.float64), int(rounds), float(window),
+                int(max_new), np.ascontiguousarray(first), known_slot, known_cols,
+            )  # fmt: skip
+        except np.linalg.LinAlgError:  # a system singular in floating point: A⁻¹ dwarfs 1/k
+            s, active = p0.copy(), np.zeros(m, dtype=np.bool_)  # (a factor's raised pivots)
+            return (s, False, active) if return_active else (s, False)
         self._columns = (index.copy(), value.copy(), slot, cols) if cols.shape[0] else None
         return (s, converged, active) if return_active else (s, converged)
 
