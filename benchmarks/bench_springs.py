@@ -17,10 +17,23 @@ With ``compare=updates`` each kept call is solved from the segment (the default)
 factor's order the engine used, without and with the rank-one modifications of the last
 round's factor (``spring_step(updates=...)``, :mod:`crumple.linalg_update`): rounds,
 factorisations, modifications, minimisers found, q reached, CPU.
+
+With ``compare=ends`` each kept call is solved once as the engine solves it above 10³ segments
+(from the segment, with the modifications) and the way it ended is counted: the minimiser
+found, the rounds run out (``spring_step``'s default), or stopped before (a round's matrix with
+a negative pivot, which releasing springs can give, or a line search that does not move).
+
+``keep=CALLS`` also writes the kept calls to the folder CALLS (which must hold no calls yet),
+one ``call<i>.npz`` each (NumPy's open format, no pickle), and ``replay CALLS`` replays them
+without re-running the stage (``every``, ``calls`` and ``curved`` are then those the calls were
+kept with, and are not read): a stage at N = 10⁵ takes minutes, its 40 calls' replay half a
+minute. The kept calls are every ``every``-th of the first ``every`` × ``calls`` the stage
+makes.
 """
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 import time
@@ -70,9 +83,18 @@ def kept_calls(n, k, save, every, limit, curved):
 _FIELDS = "data indices indptr shift g index value offset stiff start perm".split()
 
 
+def _call_files(folder):
+    """The ``call<i>.npz`` files of ``folder``, by i."""
+    names = [f for f in os.listdir(folder) if f.startswith("call") and f.endswith(".npz")]
+    return sorted(names, key=lambda f: int(f[4:-4]) if f[4:-4].isdigit() else -1)
+
+
 def write_calls(calls, folder):
-    """The kept calls as ``folder/call###.npz`` (a missing shift stored as an empty array)."""
+    """The kept calls as ``folder/call<i>.npz`` (a missing shift stored as an empty array);
+    a folder that already holds calls is refused (a replay would read them too)."""
     os.makedirs(folder, exist_ok=True)
+    if _call_files(folder):
+        raise SystemExit(f"{folder} already holds calls: keep= needs an empty folder")
     for i, call in enumerate(calls):
         arrays = {f: np.empty(0) if v is None else v for f, v in zip(_FIELDS, call, strict=True)}
         np.savez(os.path.join(folder, f"call{i:03d}.npz"), has_shift=call[3] is not None, **arrays)
@@ -81,8 +103,7 @@ def write_calls(calls, folder):
 def read_calls(folder):
     """The calls :func:`write_calls` wrote, in order."""
     calls = []
-    names = sorted(f for f in os.listdir(folder) if f.startswith("call") and f.endswith(".npz"))
-    for name in names:
+    for name in _call_files(folder):
         with np.load(os.path.join(folder, name), allow_pickle=False) as z:
             call = [z[f] for f in _FIELDS]
             if not bool(z["has_shift"]):
@@ -92,8 +113,9 @@ def read_calls(folder):
     return calls
 
 
-def count_ends(calls, rounds=30):
+def count_ends(calls):
     """Each call as the engine solves it above 10³ segments: how it ended."""
+    rounds = inspect.signature(linalg_springs.spring_step).parameters["rounds"].default
     ends = {"found": 0, "rounds run out": 0, "stopped before": 0}
     total, cpu = 0, 0.0
     for call in calls:

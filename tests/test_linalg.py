@@ -348,11 +348,17 @@ def test_spring_solve_with_a_singular_system_of_positive_springs_stops_instead_o
     has raised pivots (``minimize.SHIFTS = 1``) and A⁻¹ dwarfs 1/k. The solve used to raise
     LinAlgError out of the Newton step; it returns p0 and says it did not converge."""
     f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
-    s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0], [0]]),
-                            np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.25]),
-                            np.array([1e300, 1e300]))  # fmt: skip
+    rows = (np.array([[0], [0]]), np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.25]))
+    s, ok = f.solve_springs(np.array([1.0, 1.0]), *rows, np.array([1e300, 1e300]))
     assert not ok
     assert s.tolist() == [1.0, 1.0]
+    f.solve_springs(np.array([1.0, 1.0]), rows[0][:1], rows[1][:1], rows[2][:1], np.array([1e12]))
+    kept = f._columns  # the columns of a solve that worked
+    assert kept is not None
+    s, ok, active = f.solve_springs(np.array([1.0, 1.0]), *rows, np.array([1e300, 1e300]),
+                                    return_active=True)  # fmt: skip
+    assert not ok and s.tolist() == [1.0, 1.0] and active.tolist() == [False, False]
+    assert f._columns is kept
 
 
 def test_spring_solve_takes_a_releasing_spring_that_keeps_the_model_convex():

@@ -423,7 +423,8 @@ class Factorization:
         springs (rows of ``index`` and ``value`` equal, as a relisting of a step's springs
         gives) reuses them, bit for bit. Where the springs' small system is singular in
         floating point (A⁻¹ dwarfing 1/k, as with a factor whose pivots were raised), it
-        returns p0, not converged.
+        returns p0, not converged (the rounds before are dropped, and the columns kept are
+        those of before the call).
 
         >>> f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
         >>> s, ok = f.solve_springs(np.array([1.0, 1.0]), np.array([[0]]), np.array([[-1.0]]),
