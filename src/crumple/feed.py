@@ -26,6 +26,7 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
 from .energy import EnergyTerms, WireEnergy
 from .energy_kernels import _barrier
@@ -103,24 +104,58 @@ def wall_blocks(x, radius: float, width: float, strength: float):
 
     Returns ``(energy, grad (m, 2), near (k,) row indices, blocks (k, 2, 2))``; ``energy`` is
     inf when a row is on or outside the wall.
+
+    >>> e, g, near, b = wall_blocks(np.array([[0.0, 0.0], [0.95, 0.0]]), 1.0, 0.1, 1.0)
+    >>> round(e, 12), near.tolist(), g[1].tolist(), b[0].round(6).tolist()
+    (0.5, [1], [30.0, 0.0], [[1600.0, 0.0], [0.0, 31.578947]])
     """
-    r = np.hypot(x[:, 0], x[:, 1])
-    delta = radius - r
-    grad = np.zeros_like(x)
-    if np.any(delta <= 0):
-        return math.inf, grad, np.zeros(0, dtype=np.int64), np.zeros((0, 2, 2))
-    near = np.flatnonzero(delta < width)
-    e = 0.0
-    blocks = np.zeros((near.size, 2, 2))
-    for m, i in enumerate(near):
-        b, db, d2b = _barrier(delta[i] / width)
-        e += strength * b
-        n = x[i] / r[i]
-        grad[i] = -strength * db / width * n
-        c2 = strength * d2b / width**2
-        c1 = -strength * db / (width * r[i])
-        blocks[m] = c2 * np.outer(n, n) + c1 * (np.eye(2) - np.outer(n, n))
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    # d² squared here, not in the kernel: Python's float power and Numba's multiplication
+    # differ in the last bit for some d, and the blocks are bit for bit those of before
+    e, grad, near, blocks = _wall_kernel(x, float(radius), float(width), float(width) ** 2,
+                                         float(strength), True)  # fmt: skip
     return float(e), grad, near, blocks
+
+
+@njit(cache=True)
+def _wall_kernel(x, radius, width, width2, strength, with_blocks):
+    """:func:`wall_blocks` (``with_blocks`` False: no blocks, ``near`` empty): each node's
+    terms in the order of the NumPy expressions they replace, so the sums are bit for bit."""
+    m = x.shape[0]
+    grad = np.zeros_like(x)
+    r = np.empty(m)
+    count = 0
+    for i in range(m):
+        r[i] = np.hypot(x[i, 0], x[i, 1])
+        delta = radius - r[i]
+        if delta <= 0.0:
+            return math.inf, np.zeros_like(x), np.zeros(0, dtype=np.int64), np.zeros((0, 2, 2))
+        count += delta < width
+    near = np.empty(count if with_blocks else 0, dtype=np.int64)
+    blocks = np.zeros((near.shape[0], 2, 2))
+    e = 0.0
+    k = 0
+    for i in range(m):
+        delta = radius - r[i]
+        if not delta < width:
+            continue
+        b, db, d2b = _barrier(delta / width)
+        e += strength * b
+        nx, ny = x[i, 0] / r[i], x[i, 1] / r[i]
+        c0 = -strength * db / width
+        grad[i, 0] = c0 * nx
+        grad[i, 1] = c0 * ny
+        if with_blocks:
+            c2 = strength * d2b / width2
+            c1 = -strength * db / (width * r[i])
+            nn = (nx * nx, nx * ny, ny * nx, ny * ny)
+            for a in range(2):
+                for c in range(2):
+                    o = nn[2 * a + c]
+                    blocks[k, a, c] = c2 * o + c1 * ((1.0 if a == c else 0.0) - o)
+            near[k] = i
+            k += 1
+    return e, grad, near, blocks
 
 
 class FedWireEnergy:
@@ -147,15 +182,19 @@ class FedWireEnergy:
         self.inner = WireEnergy(wire.replace(cavity_radius=None), 0.0, rest_angles=rest_angles)
         self._lookup = None
 
-    def _wall(self, x):
+    def _wall(self, x, with_blocks=True):
         xf = x[self._free_idx]
         w = self.wire
-        return wall_blocks(xf, w.cavity_radius, w.hard_core, w.hard_core_energy)
+        if with_blocks:
+            return wall_blocks(xf, w.cavity_radius, w.hard_core, w.hard_core_energy)
+        e, g, _, _ = _wall_kernel(xf, float(w.cavity_radius), float(w.hard_core), 0.0,
+                                  float(w.hard_core_energy), False)  # fmt: skip
+        return float(e), g
 
     def __call__(self, x):
         x = np.ascontiguousarray(x, dtype=np.float64)
         e, g = self.inner(x)
-        ew, gw, _, _ = self._wall(x)
+        ew, gw = self._wall(x, with_blocks=False)
         if not math.isfinite(ew):
             return math.inf, g
         g = g.copy()
@@ -164,7 +203,7 @@ class FedWireEnergy:
 
     def terms(self, x) -> EnergyTerms:
         t = self.inner.terms(x)
-        ew = self._wall(np.ascontiguousarray(x, dtype=np.float64))[0]
+        ew = self._wall(np.ascontiguousarray(x, dtype=np.float64), with_blocks=False)[0]
         return EnergyTerms(t.bending, t.stretching, t.confinement, t.hard_core, wall=ew)
 
     def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
