@@ -134,6 +134,21 @@ def test_dense_input_is_accepted():
     np.testing.assert_allclose(f.solve(np.array([3.0, 3.0])), [1.0, 1.0])
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_dense_input_becomes_the_csc_scipy_would_build(seed):
+    """:func:`dense_csc` holds SciPy's entries in SciPy's order (NaN kept, ±0 dropped)."""
+    from crumple.linalg import dense_csc
+
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((30, 30)) * (rng.random((30, 30)) < 0.2)
+    a[rng.random((30, 30)) < 0.02] = np.nan
+    a[3, 3] = -0.0
+    want, got = sp.csc_matrix(a), dense_csc(a)
+    assert np.array_equal(got.indptr, want.indptr)
+    assert np.array_equal(got.indices, want.indices)
+    assert np.array_equal(got.data, want.data, equal_nan=True)
+
+
 @pytest.mark.parametrize("n", [10, 200])
 def test_reordering_keeps_a_chain_band_free_of_fill(n):
     a = sp.diags([np.ones(n - 2), np.ones(n - 1), np.full(n, 5.0), np.ones(n - 1), np.ones(n - 2)],

@@ -426,6 +426,30 @@ def test_fixed_rows_give_the_constrained_minimum_of_a_bowl(sparse, seed):
     assert max_force(g[fixed]) > 1e-3
 
 
+@pytest.mark.parametrize("stored", [True, False])
+def test_fixed_rows_of_a_raw_csc_hessian_are_those_of_scipys(stored):
+    """The constrained Hessian of a :class:`crumple.linalg.CSC` holds the entries the SciPy
+    route gives, on the same arrays where every fixed row's diagonal is stored; else it
+    takes the SciPy route (a new pattern)."""
+    from crumple.linalg import CSC
+    from crumple.minimize_fixed import _constrained
+
+    a = np.random.default_rng(0).standard_normal((8, 8))
+    a = a + a.T
+    if not stored:
+        a[2, 2] = 0.0
+    mask = np.zeros(8, dtype=bool)
+    mask[[2, 5]] = True
+    s = sp.csc_matrix(a)
+    raw = CSC(s.data, s.indices.astype(np.int64), s.indptr.astype(np.int64))
+    _, chess, _ = _constrained(mask, None, lambda h: h, None)
+    got, want = chess(raw), chess(s)
+    if stored:
+        assert isinstance(got, CSC) and got.indices is raw.indices
+    assert np.array_equal(got.tocsc().toarray(), want.toarray())
+    assert np.array_equal(want.toarray()[mask][:, mask], np.eye(2))
+
+
 def test_a_fixed_coordinate_of_a_one_dimensional_problem():
     def f(x):  # (x0 - 1)² + 10 (x1 + 2)² + x0 x1
         return (float((x[0] - 1) ** 2 + 10 * (x[1] + 2) ** 2 + x[0] * x[1]),
