@@ -125,6 +125,42 @@ def test_fed_energy_hessian_matches_finite_differences(dense):
     assert np.allclose(hm, num, rtol=1e-4, atol=1e-5 * np.abs(hm).max())
 
 
+@pytest.mark.parametrize("project", [False, True])
+@pytest.mark.parametrize("seed", range(3))
+def test_fed_hessian_csc_is_the_dense_hessian_entry_for_entry(seed, project):
+    """The raw CSC arrays the minimiser gets hold the dense Hessian's entries, bit for bit (the
+    same sums in the same order); pinned, the dense Hessian with the prescribed rows and
+    columns made the identity's, its nonzeros alone (the pattern SciPy gives it)."""
+    import scipy.sparse as sp
+
+    w, x, free = fed_configuration(seed)
+    f = FedWireEnergy(w, free)
+    dense = f.hessian(x, dense=True, project_contacts=project)
+    assert np.array_equal(f.hessian_csc(x, project_contacts=project).tocsc().toarray(), dense)
+    fixed = np.repeat(~free, 2)
+    dense[fixed, :] = 0.0
+    dense[:, fixed] = 0.0
+    dense[fixed, fixed] = 1.0
+    want = sp.csc_matrix(dense)
+    got = f.hessian_csc(x, project_contacts=project, pinned=True)
+    for a, b in ((got.indptr, want.indptr), (got.indices, want.indices), (got.data, want.data)):
+        assert np.array_equal(a, b)
+
+
+def test_wall_blocks_are_the_closed_form_hessian():
+    """Each near node's block is ε b''/d² n nᵀ + ε |b'|/(d r) (I - n nᵀ), n = x/r."""
+    d, eps = 1e-2, 3.0
+    x = np.array([[0.6, 0.795], [0.1, 0.0]])
+    _, _, near, blocks = wall_blocks(x, 1.0, d, eps)
+    r = math.hypot(*x[0])
+    u = (1.0 - r) / d
+    db, d2b = 1.0 - 1.0 / u**2, 2.0 / u**3
+    n = x[0] / r
+    want = eps * d2b / d**2 * np.outer(n, n) - eps * db / (d * r) * (np.eye(2) - np.outer(n, n))
+    assert near.tolist() == [0]
+    assert np.allclose(blocks[0], want, rtol=1e-12, atol=0.0)
+
+
 def test_fed_energy_ignores_the_wall_on_prescribed_nodes():
     w, x, free = fed_configuration(0)
     f = FedWireEnergy(w, free)
@@ -284,6 +320,50 @@ def test_clamp_reaction_is_the_derivative_of_the_energy_between_releases():
     assert n8 >= 20 and n16 >= 40  # the comparison is not vacuous
     assert err8 < 1e-3
     assert err16 < err8 / 3  # second order
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_branch_stiffness_sparse_and_dense_agree_with_the_schur_complement(seed):
+    """dF/dL_in = vᵀHv - (Hv)_fᵀ H_ff⁻¹ (Hv)_f by the sparse LDLᵀ (every N) and by the dense
+    Cholesky, against NumPy's solve; NaN where H_ff is not positive definite."""
+    import scipy.sparse as sp
+
+    from crumple.injection import _branch_stiffness
+    from crumple.linalg import CSC
+
+    rng = np.random.default_rng(seed)
+    n = 9
+    free = np.arange(n) < 6
+    a = rng.standard_normal((2 * n, 2 * n))
+    h = a @ a.T + 2 * n * np.eye(2 * n)
+    u = np.array([-0.6, -0.8])
+    v = np.zeros((n, 2))
+    v[~free] = u
+    v = v.ravel()
+    fd = np.repeat(free, 2)
+    hv = h @ v
+    want = v @ hv - hv[fd] @ np.linalg.solve(h[np.ix_(fd, fd)], hv[fd])
+    s = sp.csc_matrix(h)
+    sparse = _branch_stiffness(CSC(s.data, s.indices.astype(np.int64), s.indptr.astype(np.int64)),
+                               free, u)  # fmt: skip
+    assert math.isclose(sparse, want, rel_tol=1e-10)
+    assert math.isclose(_branch_stiffness(h, free, u), want, rel_tol=1e-10)
+    h[0, 0] = -50.0  # a free row of negative stiffness: H_ff indefinite
+    s = sp.csc_matrix(h)
+    assert math.isnan(_branch_stiffness(h, free, u))
+    assert math.isnan(_branch_stiffness(CSC(s.data, s.indices, s.indptr), free, u))
+
+
+def test_an_injection_above_the_dense_limit_is_inside_and_uncrossed():
+    """N = 410 (820 degrees of freedom, above ``DENSE_LIMIT``): the sparse Hessians with their
+    kept pattern, and the clamp's stiffness by the sparse LDLᵀ."""
+    w = small_wire(410, hard_core=0.002)
+    res = run_injection(w, Injection(stop_length=0.1), seed=0)
+    assert res.converged and res.stop_reason == "length"
+    for s in res.stages:
+        assert not has_crossings(s.positions)
+        assert np.hypot(*s.positions[s.free].T).max() < w.cavity_radius
+    assert np.isfinite(res.feed_forces).all()
 
 
 def test_a_wire_injected_along_the_wall_has_the_bending_of_the_circle():

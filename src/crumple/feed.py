@@ -25,11 +25,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.sparse as sp
 from numba import njit
 
-from .energy import EnergyTerms, WireEnergy
+from .energy import DENSE_LIMIT, EnergyTerms, WireEnergy
 from .energy_kernels import _barrier
+from .linalg import CSC
 from .model import Wire
 
 __all__ = ["Channel", "FedWireEnergy"]
@@ -209,31 +209,83 @@ class FedWireEnergy:
     def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
         """The Hessian of ``WireEnergy`` plus the wall's (positive semi-definite) blocks."""
         x = np.ascontiguousarray(x, dtype=np.float64)
-        h = self.inner.hessian(x, dense=dense, project_contacts=project_contacts)
+        if dense is None:
+            dense = x.size <= DENSE_LIMIT
+        if not dense:
+            return self.hessian_csc(x, project_contacts=project_contacts).tocsc()
+        h = self.inner.hessian(x, dense=True, project_contacts=project_contacts)
         _, _, near, blocks = self._wall(x)
         nodes = self._free_idx[near]
         if nodes.size == 0:
             return h
         rows = (2 * nodes[:, None, None] + np.arange(2)[None, :, None]).repeat(2, axis=2)
         cols = rows.transpose(0, 2, 1)
-        if not sp.issparse(h):
-            np.add.at(h, (rows.ravel(), cols.ravel()), blocks.ravel())
-            return h
-        # the node's own 2 × 2 block is in the pattern (stretching): add into the data
-        at = _csc_positions(h, rows.ravel(), cols.ravel())
-        data = h.data.copy()
-        np.add.at(data, at, blocks.ravel())
-        return sp.csc_matrix((data, h.indices, h.indptr), shape=h.shape, copy=False)
+        np.add.at(h, (rows.ravel(), cols.ravel()), blocks.ravel())
+        return h
+
+    def hessian_csc(self, x, *, project_contacts: bool = False, pinned: bool = False) -> CSC:
+        """The sparse :meth:`hessian` as a :class:`crumple.linalg.CSC` (the minimiser's hot
+        path, as :meth:`crumple.energy.WireEnergy.hessian_csc`): the wall's blocks added
+        into the data, each node's own 2 × 2 block being in the pattern (stretching).
+
+        ``pinned``: the prescribed nodes' rows and columns made the identity's (as the
+        minimiser's ``fixed`` makes them) and the zeros dropped: the entries, and the
+        pattern, that the dense Hessian gives as SciPy CSC.
+        """
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        h = self.inner.hessian_csc(x, project_contacts=project_contacts)
+        _, _, near, blocks = self._wall(x)
+        if near.size:
+            data, missing = _add_node_blocks(h.indptr, h.indices, h.data,
+                                             self._free_idx[near], blocks)  # fmt: skip
+            if missing >= 0:
+                raise RuntimeError(f"row {missing} of a wall block is not in the pattern")
+            h = CSC(data, h.indices, h.indptr)
+        if pinned:
+            h = CSC(*_pinned_nonzeros(h.indptr, h.indices, h.data, np.repeat(~self.free, 2)))
+        return h
 
 
-def _csc_positions(h, rows, cols) -> np.ndarray:
-    """Index into ``h.data`` of the stored entries (rows, cols) of a CSC matrix whose row
-    indices are sorted within each column."""
-    out = np.empty(rows.size, dtype=np.int64)
-    for k, (r, c) in enumerate(zip(rows, cols, strict=True)):
-        lo, hi = h.indptr[c], h.indptr[c + 1]
-        j = lo + int(np.searchsorted(h.indices[lo:hi], r))
-        if j >= hi or h.indices[j] != r:
-            raise RuntimeError(f"entry ({r}, {c}) is not in the Hessian's pattern")
-        out[k] = j
-    return out
+@njit(cache=True)
+def _pinned_nonzeros(indptr, indices, data, mask):
+    """The CSC arrays of the matrix with the rows and columns of ``mask`` made the identity's
+    (1 on a stored diagonal, 0 elsewhere), its zeros dropped; rows stay sorted."""
+    n = indptr.shape[0] - 1
+    out_p = np.zeros(n + 1, dtype=np.int64)
+    out_i = np.empty(indices.shape[0], dtype=np.int64)
+    out_x = np.empty(indices.shape[0])
+    q = 0
+    for j in range(n):
+        for p in range(indptr[j], indptr[j + 1]):
+            i = indices[p]
+            v = data[p]
+            if mask[i] or mask[j]:
+                v = 1.0 if i == j else 0.0
+            if v != 0.0:
+                out_i[q] = i
+                out_x[q] = v
+                q += 1
+        out_p[j + 1] = q
+    return out_x[:q], out_i[:q], out_p
+
+
+@njit(cache=True)
+def _add_node_blocks(indptr, indices, data, nodes, blocks):
+    """A copy of the CSC ``data`` with ``blocks[k]`` added on node ``nodes[k]``'s 2 × 2
+    diagonal block (rows sorted within each column); and -1, or the first row not stored."""
+    out = data.copy()
+    for k in range(nodes.shape[0]):
+        for a in range(2):
+            for c in range(2):
+                r, col = 2 * nodes[k] + a, 2 * nodes[k] + c
+                lo, hi = indptr[col], indptr[col + 1]
+                while lo < hi:  # the first stored row >= r
+                    mid = (lo + hi) // 2
+                    if indices[mid] < r:
+                        lo = mid + 1
+                    else:
+                        hi = mid
+                if lo >= indptr[col + 1] or indices[lo] != r:
+                    return out, r
+                out[lo] += blocks[k, a, c]
+    return out, -1

@@ -31,10 +31,12 @@ import numpy as np
 import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
-from .energy import EnergyTerms
+from .energy import DENSE_LIMIT, EnergyTerms
 from .feed import Channel, FedWireEnergy
 from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
+from .linalg import CSC, LDLT
 from .minimize import MinimizeResult, newton
+from .minimize_fixed import _pinned_data
 from .model import Wire
 from .protocol import DEFAULT_MAXITER, STABILITY_TOL, node_lengths
 
@@ -409,8 +411,8 @@ class _Injector:
         where the free nodes' Hessian is not positive definite)."""
         energy = self._energy()
         force = clamp_reaction(energy(self.x)[1], ~self.free, self.channel)
-        return force, _branch_stiffness(energy.hessian(self.x, dense=None), self.free,
-                                        self.channel.direction)  # fmt: skip
+        h = energy.hessian_csc(self.x)  # H_ff⁻¹ by the sparse LDLᵀ at every N
+        return force, _branch_stiffness(h, self.free, self.channel.direction)
 
     def _advance(self, eta: float) -> tuple[str, float, MinimizeResult | None, list[str]]:
         """Move the channel's nodes in by ``eta``, relaxing the free nodes after every move.
@@ -484,10 +486,14 @@ class _Injector:
                 hessian_evaluations=0, converged=True, ftol=self.inj.ftol,
                 message="no free node: nothing to minimise", method="newton",
             )  # fmt: skip
+        # the raw CSC arrays, no SciPy matrix per iteration; up to DENSE_LIMIT degrees of
+        # freedom the nonzeros alone, with the prescribed rows pinned: the pattern the dense
+        # Hessian of before gave the factorisation, so the iterates are the same bit for bit
+        pinned = self.x.size <= DENSE_LIMIT
         res = newton(
             energy, self.x,
-            hess=lambda x: energy.hessian(x, dense=None),
-            hess_fallback=lambda x: energy.hessian(x, dense=None, project_contacts=True),
+            hess=lambda x: energy.hessian_csc(x, pinned=pinned),
+            hess_fallback=lambda x: energy.hessian_csc(x, project_contacts=True, pinned=pinned),
             ftol=self.inj.ftol, maxiter=self.inj.maxiter, max_step=self.inj.max_step,
             step_limit=self._step_limit, feasible=self._feasible,
             curvature_tol=STABILITY_TOL, metric=node_lengths(self.wire), fixed=~self.free,
@@ -518,6 +524,13 @@ def _branch_stiffness(hessian, free, direction) -> float:
     fd = np.repeat(free, 2)
     if not fd.any():
         return float(v @ hv)
+    if isinstance(hessian, CSC):  # sparse: H_ff⁻¹ by the sparse LDLᵀ, not a dense Cholesky
+        return _branch_stiffness_sparse(hessian, fd, v, hv)
+    return _branch_stiffness_dense(hessian, fd, v, hv)
+
+
+def _branch_stiffness_dense(hessian, fd, v, hv) -> float:
+    """:func:`_branch_stiffness` with H_ff⁻¹ from the dense Cholesky of H_ff."""
     h = hessian.toarray() if sp.issparse(hessian) else np.asarray(hessian)
     try:
         c = np.linalg.cholesky(h[np.ix_(fd, fd)])
@@ -525,6 +538,23 @@ def _branch_stiffness(hessian, free, direction) -> float:
         return math.nan
     z = np.linalg.solve(c, hv[fd])
     return float(v @ hv - z @ z)
+
+
+def _branch_stiffness_sparse(hessian: CSC, fd, v, hv) -> float:
+    """:func:`_branch_stiffness` with H_ff⁻¹ from the sparse LDLᵀ of H with the prescribed
+    rows and columns made the identity's (positive definite exactly where H_ff is): the
+    chain's fill, where the dense Cholesky is O(N³). The same number to round-off."""
+    data = _pinned_data(hessian.indptr, hessian.indices, hessian.data, ~fd)
+    if data is None:  # a prescribed row's diagonal not stored: the dense way
+        return _branch_stiffness_dense(hessian.tocsc(), fd, v, hv)
+    f = LDLT().factorize(CSC(data, hessian.indices, hessian.indptr))
+    if not f.positive_definite:
+        return math.nan
+    b = np.where(fd, hv, 0.0)
+    y = f.solve(b)
+    if not np.isfinite(y).all():
+        return math.nan
+    return float(v @ hv - b[fd] @ y[fd])
 
 
 def _hermite_work(f0: float, k0: float, f1: float, k1: float, eta: float) -> float:
