@@ -29,7 +29,7 @@ from numba import njit
 
 from .energy import DENSE_LIMIT, EnergyTerms, WireEnergy
 from .energy_kernels import _barrier
-from .linalg import CSC
+from .linalg import CSC, pin_rows
 from .model import Wire
 
 __all__ = ["Channel", "FedWireEnergy"]
@@ -242,31 +242,10 @@ class FedWireEnergy:
                 raise RuntimeError(f"row {missing} of a wall block is not in the pattern")
             h = CSC(data, h.indices, h.indptr)
         if pinned:
-            h = CSC(*_pinned_nonzeros(h.indptr, h.indices, h.data, np.repeat(~self.free, 2)))
+            h = pin_rows(h, np.repeat(~self.free, 2), drop_zeros=True)
+            if h is None:
+                raise RuntimeError("a prescribed node's diagonal is not in the Hessian's pattern")
         return h
-
-
-@njit(cache=True)
-def _pinned_nonzeros(indptr, indices, data, mask):
-    """The CSC arrays of the matrix with the rows and columns of ``mask`` made the identity's
-    (1 on a stored diagonal, 0 elsewhere), its zeros dropped; rows stay sorted."""
-    n = indptr.shape[0] - 1
-    out_p = np.zeros(n + 1, dtype=np.int64)
-    out_i = np.empty(indices.shape[0], dtype=np.int64)
-    out_x = np.empty(indices.shape[0])
-    q = 0
-    for j in range(n):
-        for p in range(indptr[j], indptr[j + 1]):
-            i = indices[p]
-            v = data[p]
-            if mask[i] or mask[j]:
-                v = 1.0 if i == j else 0.0
-            if v != 0.0:
-                out_i[q] = i
-                out_x[q] = v
-                q += 1
-        out_p[j + 1] = q
-    return out_x[:q], out_i[:q], out_p
 
 
 @njit(cache=True)

@@ -34,9 +34,8 @@ from threadpoolctl import threadpool_limits
 from .energy import DENSE_LIMIT, EnergyTerms
 from .feed import Channel, FedWireEnergy
 from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
-from .linalg import CSC, LDLT
+from .linalg import CSC, LDLT, pin_rows
 from .minimize import MinimizeResult, newton
-from .minimize_fixed import _pinned_data
 from .model import Wire
 from .protocol import DEFAULT_MAXITER, STABILITY_TOL, node_lengths
 
@@ -544,10 +543,10 @@ def _branch_stiffness_sparse(hessian: CSC, fd, v, hv) -> float:
     """:func:`_branch_stiffness` with H_ff⁻¹ from the sparse LDLᵀ of H with the prescribed
     rows and columns made the identity's (positive definite exactly where H_ff is): the
     chain's fill, where the dense Cholesky is O(N³). The same number to round-off."""
-    data = _pinned_data(hessian.indptr, hessian.indices, hessian.data, ~fd)
-    if data is None:  # a prescribed row's diagonal not stored: the dense way
+    pinned = pin_rows(hessian, ~fd)
+    if pinned is None:  # a prescribed row's diagonal not stored: the dense way
         return _branch_stiffness_dense(hessian.tocsc(), fd, v, hv)
-    f = LDLT().factorize(CSC(data, hessian.indices, hessian.indptr))
+    f = LDLT().factorize(pinned)
     if not f.positive_definite:
         return math.nan
     b = np.where(fd, hv, 0.0)

@@ -29,6 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
+from .linalg_csc import _dense_to_csc, _pin
 from .linalg_order import _rcm, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
@@ -220,42 +221,6 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp,
                    stop)  # fmt: skip
 
 
-@njit(cache=True)
-def _dense_to_csc(a):
-    """The stored entries of a dense square array as CSC arrays: its nonzeros (NaN included)
-    column by column, rows ascending; what ``scipy.sparse.csc_matrix(a)`` holds."""
-    n = a.shape[0]
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    for j in range(n):
-        c = 0
-        for i in range(n):
-            c += a[i, j] != 0.0
-        indptr[j + 1] = indptr[j] + c
-    indices = np.empty(indptr[n], dtype=np.int64)
-    data = np.empty(indptr[n])
-    p = 0
-    for j in range(n):
-        for i in range(n):
-            if a[i, j] != 0.0:
-                indices[p] = i
-                data[p] = a[i, j]
-                p += 1
-    return data, indices, indptr
-
-
-def dense_csc(a) -> CSC:
-    """A dense square array as :class:`CSC` (its nonzeros), without SciPy's COO conversion:
-    the same entries, in the same order, as ``scipy.sparse.csc_matrix(a)``.
-
-    >>> dense_csc(np.array([[2.0, 1.0], [1.0, 0.0]])).indices.tolist()
-    [0, 1, 0]
-    """
-    a = np.asarray(a, dtype=np.float64)
-    if a.ndim != 2 or a.shape[0] != a.shape[1]:
-        raise ValueError(f"a square matrix is needed, got shape {a.shape}")
-    return CSC(*_dense_to_csc(a))
-
-
 _EMPTY = np.empty(0)
 _NO_START = np.zeros(0, dtype=np.bool_)
 _NO_SLOT = np.zeros(0, dtype=np.int64)
@@ -316,6 +281,38 @@ class CSC:
     def diagonal_entry(self, j: int) -> float:
         """A_jj (0 where the pattern does not store it)."""
         return float(_diagonal_entry(self.indptr, self.indices, self.data, j))
+
+
+def dense_csc(a) -> CSC:
+    """A dense square array as :class:`CSC` (its nonzeros), without SciPy's COO conversion:
+    the same entries, in the same order, as ``scipy.sparse.csc_matrix(a)``.
+
+    >>> dense_csc(np.array([[2.0, 1.0], [1.0, 0.0]])).indices.tolist()
+    [0, 1, 0]
+    """
+    a = np.asarray(a, dtype=np.float64)
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise ValueError(f"a square matrix is needed, got shape {a.shape}")
+    return CSC(*_dense_to_csc(a))
+
+
+def pin_rows(a: CSC, mask, *, drop_zeros: bool = False) -> CSC | None:
+    """``a`` with the rows and columns of ``mask`` (boolean, one per row) made the identity's:
+    1 on their diagonal, 0 elsewhere in them; what a minimiser's fixed rows need. The index
+    arrays are ``a``'s (a symbolic analysis still matches), or with ``drop_zeros`` those of
+    the nonzeros alone. None where a masked row's diagonal is not stored.
+
+    >>> a = CSC(np.array([2.0, 1.0, 1.0, 3.0]), np.array([0, 1, 0, 1]), np.array([0, 2, 4]))
+    >>> pin_rows(a, np.array([True, False])).data.tolist()
+    [1.0, 0.0, 0.0, 3.0]
+    >>> pin_rows(a, np.array([True, False]), drop_zeros=True).indices.tolist()
+    [0, 1]
+    """
+    mask = np.asarray(mask, dtype=np.bool_)
+    data, indices, indptr, ok = _pin(a.indptr, a.indices, a.data, mask, bool(drop_zeros))
+    if not ok:
+        return None
+    return CSC(data, indices, indptr) if drop_zeros else CSC(data, a.indices, a.indptr)
 
 
 class _Symbolic:

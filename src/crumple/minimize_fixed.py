@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
 
-from .linalg import CSC
+from .linalg import CSC, pin_rows
 
 
 def _fixed_mask(fixed, x):
@@ -42,9 +41,9 @@ def _constrained(mask, fun, hess, hess_fallback):
 
     def chess(h):
         if isinstance(h, CSC):
-            data = _pinned_data(h.indptr, h.indices, h.data, mask)
-            if data is not None:  # the fast path below, on the raw arrays
-                return CSC(data, h.indices, h.indptr)
+            pinned = pin_rows(h, mask)  # the fast path below, on the raw arrays
+            if pinned is not None:
+                return pinned
             h = h.tocsc()
         if sp.issparse(h):
             h = h.tocsc()
@@ -72,32 +71,6 @@ def _constrained(mask, fun, hess, hess_fallback):
     else:
         fallback = lambda x: chess(hess_fallback(x))  # noqa: E731
     return cfun, chessian, fallback
-
-
-def _pinned_data(indptr, indices, data, mask):
-    """The data of a :class:`CSC` with the fixed rows and columns made the identity's, or
-    None where a fixed row's diagonal is not stored (the pattern must then change)."""
-    out = data.copy()
-    return out if _pin_kernel(indptr, indices, out, mask) else None
-
-
-@njit(cache=True)
-def _pin_kernel(indptr, indices, data, mask):
-    """In place: 1 on the stored diagonal of the fixed rows, 0 elsewhere in their rows and
-    columns; False (data partly written) where a fixed row's diagonal is not stored."""
-    n = indptr.shape[0] - 1
-    for j in range(n):
-        seen = not mask[j]
-        for p in range(indptr[j], indptr[j + 1]):
-            i = indices[p]
-            if i == j and mask[j]:
-                data[p] = 1.0
-                seen = True
-            elif mask[i] or mask[j]:
-                data[p] = 0.0
-        if not seen:
-            return False
-    return True
 
 
 def _constrained_action(mask, hess_action):
