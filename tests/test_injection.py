@@ -147,6 +147,59 @@ def test_fed_hessian_csc_is_the_dense_hessian_entry_for_entry(seed, project):
         assert np.array_equal(a, b)
 
 
+def _wall_blocks_numpy(x, radius, width, strength):
+    """The wall's terms as NumPy expressions (the code the kernel replaced), the reference of
+    the bit-for-bit test below."""
+    from crumple.energy_kernels import _barrier
+
+    r = np.hypot(x[:, 0], x[:, 1])
+    delta = radius - r
+    grad = np.zeros_like(x)
+    if np.any(delta <= 0):
+        return math.inf, grad, np.zeros(0, dtype=np.int64), np.zeros((0, 2, 2))
+    near = np.flatnonzero(delta < width)
+    e = 0.0
+    blocks = np.zeros((near.size, 2, 2))
+    for m, i in enumerate(near):
+        b, db, d2b = _barrier(delta[i] / width)
+        e += strength * b
+        n = x[i] / r[i]
+        grad[i] = -strength * db / width * n
+        c2 = strength * d2b / width**2
+        c1 = -strength * db / (width * r[i])
+        blocks[m] = c2 * np.outer(n, n) + c1 * (np.eye(2) - np.outer(n, n))
+    return float(e), grad, near, blocks
+
+
+def test_wall_blocks_are_the_numpy_expressions_bit_for_bit():
+    """The wall's kernel adds the same products in the same order as the NumPy expressions,
+    for random widths (Numba's d*d and Python's d**2 differ in the last bit for some: the
+    kernel must get d² from Python), nodes outside the wall and NaN rows."""
+    rng = np.random.default_rng(7)
+    widths = rng.uniform(1e-5, 0.2, 200_000).tolist()
+    odd = [d for d in widths if d * d != d**2][:100]  # Python floats: d*d and d**2 differ
+    assert len(odd) >= 20
+    for trial in range(400):
+        width = odd[trial % len(odd)] if trial % 2 else float(rng.uniform(1e-5, 0.2))
+        radius = float(width / rng.uniform(1e-3, 0.2))
+        strength = float(rng.uniform(0.1, 10.0))
+        m = int(rng.integers(0, 30))
+        ang = rng.uniform(0.0, 2.0 * np.pi, m)
+        rad = radius - width * rng.uniform(0.01, 3.0, m)
+        x = np.c_[rad * np.cos(ang), rad * np.sin(ang)]
+        if trial % 50 == 1 and m:
+            x[0] = [radius * 1.01, 0.0]  # outside: infinite energy, zero gradient
+        if trial % 50 == 2 and m:
+            x[-1] = np.nan
+        want, got = (
+            _wall_blocks_numpy(x, radius, width, strength),
+            wall_blocks(x, radius, width, strength),
+        )
+        assert want[0] == got[0] or (math.isnan(want[0]) and math.isnan(got[0]))
+        for a, b in zip(want[1:], got[1:], strict=True):
+            assert np.array_equal(a, b, equal_nan=True), trial
+
+
 def test_wall_blocks_are_the_closed_form_hessian():
     """Each near node's block is ε b''/d² n nᵀ + ε |b'|/(d r) (I - n nᵀ), n = x/r."""
     d, eps = 1e-2, 3.0
@@ -354,8 +407,37 @@ def test_branch_stiffness_sparse_and_dense_agree_with_the_schur_complement(seed)
     assert math.isnan(_branch_stiffness(CSC(s.data, s.indices, s.indptr), free, u))
 
 
+def test_an_injection_takes_the_steps_it_took_with_dense_hessians(monkeypatch):
+    """Below ``DENSE_LIMIT`` the injection's raw CSC Hessians (pinned, zeros dropped) give the
+    factorisation the entries and pattern of the dense Hessian the injection used before, so
+    every iterate is the same, bit for bit, as with the dense route (dense, pinned, then
+    into CSC as SciPy would store it)."""
+    from crumple.linalg import dense_csc
+
+    w = Wire(k_b=5.0, k_s=5e5, n_segments=30, hard_core=0.002, cavity_radius=0.1,
+             rest_angle_sd=0.01)  # fmt: skip
+    inj = Injection(angle=0.3, stop_length=0.7)
+    fast = run_injection(w, inj, seed=2)
+
+    def dense_route(self, x, *, project_contacts=False, pinned=False):
+        h = self.hessian(x, dense=True, project_contacts=project_contacts)
+        if pinned:
+            fixed = np.repeat(~self.free, 2)
+            h[fixed, :] = 0.0
+            h[:, fixed] = 0.0
+            h[fixed, fixed] = 1.0
+        return dense_csc(h)
+
+    monkeypatch.setattr(FedWireEnergy, "hessian_csc", dense_route)
+    slow = run_injection(w, inj, seed=2)
+    assert len(fast.stages) == len(slow.stages) > 10
+    for a, b in zip(fast.stages, slow.stages, strict=True):
+        assert np.array_equal(a.positions, b.positions)
+        assert a.result.iterations == b.result.iterations
+
+
 def test_an_injection_above_the_dense_limit_is_inside_and_uncrossed():
-    """N = 410 (820 degrees of freedom, above ``DENSE_LIMIT``): the sparse Hessians with their
+    """N = 410 (822 degrees of freedom, above ``DENSE_LIMIT``): the sparse Hessians with their
     kept pattern, and the clamp's stiffness by the sparse LDLᵀ."""
     w = small_wire(410, hard_core=0.002)
     res = run_injection(w, Injection(stop_length=0.1), seed=0)

@@ -149,6 +149,38 @@ def test_dense_input_becomes_the_csc_scipy_would_build(seed):
     assert np.array_equal(got.data, want.data, equal_nan=True)
 
 
+@pytest.mark.parametrize("drop", [False, True])
+@pytest.mark.parametrize("seed", range(3))
+def test_pinned_rows_are_the_dense_pinning(seed, drop):
+    """:func:`pin_rows` gives the entries of the dense matrix with the masked rows and columns
+    made the identity's: on the same index arrays, or (``drop_zeros``) as SciPy would store
+    the result; None where a masked row's diagonal is not stored."""
+    from crumple.linalg import pin_rows
+
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((12, 12)) * (rng.random((12, 12)) < 0.4)
+    a = a + a.T + np.diag(rng.uniform(1.0, 2.0, 12))
+    mask = rng.random(12) < 0.3
+    mask[0] = True
+    s = sp.csc_matrix(a)
+    raw = CSC(s.data, s.indices.astype(np.int64), s.indptr.astype(np.int64))
+    want = a.copy()
+    want[mask, :] = 0.0
+    want[:, mask] = 0.0
+    want[mask, mask] = 1.0
+    got = pin_rows(raw, mask, drop_zeros=drop)
+    assert np.array_equal(got.tocsc().toarray(), want)
+    if drop:
+        ref = sp.csc_matrix(want)
+        assert np.array_equal(got.indices, ref.indices) and np.array_equal(got.data, ref.data)
+    else:
+        assert got.indices is raw.indices and got.indptr is raw.indptr
+    assert np.array_equal(raw.tocsc().toarray(), a)  # the input is untouched
+    a[0, 0] = 0.0
+    s = sp.csc_matrix(a)
+    assert pin_rows(CSC(s.data, s.indices, s.indptr), mask, drop_zeros=drop) is None
+
+
 @pytest.mark.parametrize("n", [10, 200])
 def test_reordering_keeps_a_chain_band_free_of_fill(n):
     a = sp.diags([np.ones(n - 2), np.ones(n - 1), np.full(n, 5.0), np.ones(n - 1), np.ones(n - 2)],
