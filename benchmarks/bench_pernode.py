@@ -20,11 +20,12 @@ from crumple.model import Plasticity, Wire
 from crumple.protocol import Ramp, default_schedule, replica_seeds, run_ramp
 
 
-def _ramp(wire: Wire, n: int) -> tuple[float, bool]:
+def _ramp(wire: Wire, n: int) -> tuple[float, bool, int]:
+    """CPU seconds, whether every stage converged, and the Newton iterations of one ramp."""
     seed = replica_seeds(paper.SEED, 1)[0]
     t = time.process_time()
     r = run_ramp(wire, Ramp(lambdas=default_schedule(n=n)), seed=seed)
-    return time.process_time() - t, r.converged
+    return time.process_time() - t, r.converged, sum(s.result.iterations for s in r.stages)
 
 
 def _points() -> list[dict]:
@@ -43,15 +44,17 @@ def main(argv: list[str]) -> None:
     _ramp(Wire(k_b=5.0, k_s=5e5), 2)  # compilation
     if argv[:1] == ["fig2"]:
         for conf in ("per-length", "per-node"):
-            dt, ok = _ramp(Wire(k_b=5.0, k_s=5e5, confinement=conf), 40)
-            print(f"{conf:10s} (5, 5e5) 44 stages: {dt:6.2f} s CPU, converged {ok}")
+            dt, ok, its = _ramp(Wire(k_b=5.0, k_s=5e5, confinement=conf), 40)
+            print(f"{conf:10s} (5, 5e5) 44 stages: {dt:6.2f} s CPU, {its} Newton iterations "
+                  f"({dt / its * 1e3:.2f} ms each), converged {ok}")  # fmt: skip
     elif argv[:1] == ["points"]:
         n = int(argv[1]) if len(argv) > 1 else 16
         total = 0.0
         for p in _points():
-            dt, ok = _ramp(Wire(confinement="per-node", **p), n)
+            dt, ok, its = _ramp(Wire(confinement="per-node", **p), n)
             total += dt
-            print(f"per-node {p}: {dt:6.2f} s CPU, converged {ok}", flush=True)
+            print(f"per-node {p}: {dt:6.2f} s CPU, {its} Newton iterations, converged {ok}",
+                  flush=True)  # fmt: skip
         print(f"total {total:.1f} s CPU")
     else:
         raise SystemExit(__doc__)
