@@ -45,7 +45,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 from bench_scale import continuum_wire
 
 from crumple import linalg_springs, minimize_barriers
-from crumple.linalg import CSC, LDLT, _csc_matvec
+from crumple.linalg import CSC, LDLT
+from crumple.linalg_csc import _csc_matvec
 from crumple.protocol import Ramp
 from crumple.relax import minimize_wire
 

@@ -30,6 +30,7 @@ from numba import njit
 from .energy import DENSE_LIMIT, EnergyTerms, WireEnergy
 from .energy_kernels import _barrier
 from .linalg import CSC, pin_rows
+from .linalg_csc import _position
 from .model import Wire
 
 __all__ = ["Channel", "FedWireEnergy"]
@@ -256,15 +257,9 @@ def _add_node_blocks(indptr, indices, data, nodes, blocks):
     for k in range(nodes.shape[0]):
         for a in range(2):
             for c in range(2):
-                r, col = 2 * nodes[k] + a, 2 * nodes[k] + c
-                lo, hi = indptr[col], indptr[col + 1]
-                while lo < hi:  # the first stored row >= r
-                    mid = (lo + hi) // 2
-                    if indices[mid] < r:
-                        lo = mid + 1
-                    else:
-                        hi = mid
-                if lo >= indptr[col + 1] or indices[lo] != r:
+                r = 2 * nodes[k] + a
+                at = _position(indptr, indices, r, 2 * nodes[k] + c)
+                if at < 0:
                     return out, r
-                out[lo] += blocks[k, a, c]
+                out[at] += blocks[k, a, c]
     return out, -1

@@ -29,11 +29,11 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from .linalg_csc import _dense_to_csc, _pin
+from .linalg_csc import CSC, dense_csc, pin_rows
 from .linalg_order import _rcm, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
-__all__ = ["CSC", "LDLT", "Factorization"]
+__all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "pin_rows"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -170,43 +170,6 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
 
 
 @njit(cache=True)
-def _csc_matvec(indptr, indices, data, v):
-    """A v for A in CSC: SciPy's ``csc_matvec`` loop, the same products added in its order."""
-    out = np.zeros(indptr.shape[0] - 1)
-    for j in range(indptr.shape[0] - 1):
-        vj = v[j]
-        for p in range(indptr[j], indptr[j + 1]):
-            out[indices[p]] += data[p] * vj
-    return out
-
-
-@njit(cache=True)
-def _diagonal_entry(indptr, indices, data, j):
-    """A_jj of a CSC matrix whose rows are sorted within each column (0 if not stored)."""
-    for p in range(indptr[j], indptr[j + 1]):
-        if indices[p] >= j:
-            return data[p] if indices[p] == j else 0.0
-    return 0.0
-
-
-@njit(cache=True)
-def _abs_weighted_row_max(indptr, indices, data, u):
-    """max_i Σ_j |A_ij| u_j of a symmetric CSC matrix, as column sums Σ_i |A_ij| u_i (the
-    same products added in the same order as ``np.bincount`` over the entries); 0 if empty,
-    NaN if any sum is NaN."""
-    n = indptr.shape[0] - 1
-    best = 0.0
-    for j in range(n):
-        s = 0.0
-        for p in range(indptr[j], indptr[j + 1]):
-            s += abs(data[p]) * u[indices[p]]
-        if s != s:
-            return s
-        best = max(best, s)
-    return best
-
-
-@njit(cache=True)
 def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp, li, lx, d,
                      first, stop=False):  # fmt: skip
     """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
@@ -228,91 +191,8 @@ _NO_COLUMNS = np.zeros((0, 0))
 
 
 # --------------------------------------------------------------------------------------------
-# A raw CSC matrix, the symbolic analysis and the factorisation object
+# The symbolic analysis and the factorisation object (the raw CSC matrix: linalg_csc)
 # --------------------------------------------------------------------------------------------
-
-
-class CSC:
-    """A square sparse matrix held as its raw CSC arrays (both triangles), unchecked.
-
-    What a Newton iteration needs of its Hessian without the cost of building a SciPy matrix
-    (its index checks cost more than the assembly at N = 100): :meth:`LDLT.factorize` takes
-    it as it is, and :meth:`tocsc` gives the SciPy matrix, on the same arrays, where an
-    external API needs one. The caller guarantees the CSC invariants (rows sorted and
-    unique within each column, ``indptr`` of length n + 1) and a structurally symmetric
-    pattern (entry (i, j) stored whenever (j, i) is, as an assembly of symmetric blocks gives).
-
-    >>> a = CSC(np.array([2.0, 1.0, 1.0, 3.0]), np.array([0, 1, 0, 1]), np.array([0, 2, 4]))
-    >>> a.shape, a.nnz, (a @ np.ones(2)).tolist()
-    ((2, 2), 4, [3.0, 4.0])
-    """
-
-    __slots__ = ("_scipy", "data", "indices", "indptr", "shape")
-    format = "csc"
-
-    def __init__(self, data, indices, indptr):
-        self.data, self.indices, self.indptr = data, indices, indptr
-        n = indptr.shape[0] - 1
-        self.shape = (n, n)
-        self._scipy = None
-
-    @property
-    def nnz(self) -> int:
-        return int(self.indptr[-1])
-
-    def tocsc(self) -> sp.csc_matrix:
-        """The SciPy CSC matrix on the same arrays (built once)."""
-        if self._scipy is None:
-            self._scipy = sp.csc_matrix(
-                (self.data, self.indices, self.indptr), shape=self.shape, copy=False
-            )
-        return self._scipy
-
-    def __matmul__(self, v):
-        v = np.asarray(v)
-        if v.ndim == 1 and v.dtype == np.float64 and v.shape[0] == self.shape[1]:
-            return _csc_matvec(self.indptr, self.indices, self.data, v)
-        return self.tocsc() @ v
-
-    def abs_row_max(self, u) -> float:
-        """max_i Σ_j |A_ij| u_j (A symmetric): the largest change of A u's rows by a move u."""
-        return float(_abs_weighted_row_max(self.indptr, self.indices, self.data, u))
-
-    def diagonal_entry(self, j: int) -> float:
-        """A_jj (0 where the pattern does not store it)."""
-        return float(_diagonal_entry(self.indptr, self.indices, self.data, j))
-
-
-def dense_csc(a) -> CSC:
-    """A dense square array as :class:`CSC` (its nonzeros), without SciPy's COO conversion:
-    the same entries, in the same order, as ``scipy.sparse.csc_matrix(a)``.
-
-    >>> dense_csc(np.array([[2.0, 1.0], [1.0, 0.0]])).indices.tolist()
-    [0, 1, 0]
-    """
-    a = np.asarray(a, dtype=np.float64)
-    if a.ndim != 2 or a.shape[0] != a.shape[1]:
-        raise ValueError(f"a square matrix is needed, got shape {a.shape}")
-    return CSC(*_dense_to_csc(a))
-
-
-def pin_rows(a: CSC, mask, *, drop_zeros: bool = False) -> CSC | None:
-    """``a`` with the rows and columns of ``mask`` (boolean, one per row) made the identity's:
-    1 on their diagonal, 0 elsewhere in them; what a minimiser's fixed rows need. The index
-    arrays are ``a``'s (a symbolic analysis still matches), or with ``drop_zeros`` those of
-    the nonzeros alone. None where a masked row's diagonal is not stored.
-
-    >>> a = CSC(np.array([2.0, 1.0, 1.0, 3.0]), np.array([0, 1, 0, 1]), np.array([0, 2, 4]))
-    >>> pin_rows(a, np.array([True, False])).data.tolist()
-    [1.0, 0.0, 0.0, 3.0]
-    >>> pin_rows(a, np.array([True, False]), drop_zeros=True).indices.tolist()
-    [0, 1]
-    """
-    mask = np.asarray(mask, dtype=np.bool_)
-    data, indices, indptr, ok = _pin(a.indptr, a.indices, a.data, mask, bool(drop_zeros))
-    if not ok:
-        return None
-    return CSC(data, indices, indptr) if drop_zeros else CSC(data, a.indices, a.indptr)
 
 
 class _Symbolic:

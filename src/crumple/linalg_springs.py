@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .linalg import CSC, _csc_matvec
+from .linalg import CSC
+from .linalg_csc import _csc_matvec, _position
 from .linalg_solve import _row_dot, _row_positions
 from .linalg_update import factor_work, inverse_order, modified, path_work
 
@@ -52,17 +53,10 @@ def _with_springs(indptr, indices, data, index, value, stiff, active):
         for c2 in range(w):
             col = index[i, c2]
             for c1 in range(w):
-                row = index[i, c1]
-                lo, hi = indptr[col], indptr[col + 1]
-                while lo < hi:  # rows are sorted within a column
-                    mid = (lo + hi) // 2
-                    if indices[mid] < row:
-                        lo = mid + 1
-                    else:
-                        hi = mid
-                if lo == indptr[col + 1] or indices[lo] != row:
+                at = _position(indptr, indices, index[i, c1], col)
+                if at < 0:
                     return out, False
-                out[lo] += stiff[i] * value[i, c1] * value[i, c2]
+                out[at] += stiff[i] * value[i, c1] * value[i, c2]
     return out, True
 
 
