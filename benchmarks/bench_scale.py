@@ -419,11 +419,11 @@ def bench_compare():
 
 def bench_gauge(ns=()):
     """Default-schedule ramps with the zero modes' gauge in the Newton step (the engine) and
-    without it (``minimize._gauge_pin`` returning None: the engine before 4483c13, bit
+    without it (``minimize_direction._gauge_pin`` returning None: the engine before 4483c13, bit
     for bit), in one process: N = 100 (k_b = 5, k_s = 5e5) seeds 0-2, then the continuum wire
     at each N given (seed 0). And where it matters: the lowest mode of the Hessian in the
     middle of N = 100's λ = 917 stage against the rotation about the trap's centre."""
-    import crumple.minimize as minimize_module
+    import crumple.minimize_direction as minimize_module
 
     on = minimize_module._gauge_pin
     run_ramp(Wire(k_b=5, k_s=5e5, n_segments=10), seed=0)  # compilation out of the timings
@@ -449,7 +449,7 @@ def bench_gauge(ns=()):
 def _gauge_overlap():
     """The lowest eigenvectors (per length, dense) of the exact and contacts-projected Hessians
     halfway through the N = 100 λ = 917 stage, without the gauge, against the rotation."""
-    import crumple.minimize as minimize_module
+    import crumple.minimize_direction as minimize_module
     from crumple.protocol import node_lengths
 
     wire = Wire(k_b=5, k_s=5e5)

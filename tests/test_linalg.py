@@ -392,8 +392,8 @@ def test_spring_solve_refuses_an_active_set_without_a_minimiser(k):
 def test_spring_solve_with_a_singular_system_of_positive_springs_stops_instead_of_raising():
     """Two copies of one spring, stiff beyond float64 (1/k = 10⁻³⁰⁰ next to A⁻¹ = 1): their
     Woodbury system [[1, 1], [1, 1]] is singular in floating point, as it is where A's factor
-    has raised pivots (``minimize.SHIFTS = 1``) and A⁻¹ dwarfs 1/k. The solve used to raise
-    LinAlgError out of the Newton step; it returns p0 and says it did not converge."""
+    has raised pivots (``minimize_direction.SHIFTS = 1``) and A⁻¹ dwarfs 1/k. The solve used
+    to raise LinAlgError out of the Newton step; it returns p0 and says it did not converge."""
     f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
     rows = (np.array([[0], [0]]), np.array([[-1.0], [-1.0]]), np.array([-0.25, -0.25]))
     s, ok = f.solve_springs(np.array([1.0, 1.0]), *rows, np.array([1e300, 1e300]))

@@ -1855,7 +1855,8 @@ def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_ra
     """The σ search (``newton(shift_descents=4)``, the exact fallback's): from an overshooting
     σ = 1 on H = diag(1, -0.01) it divides by 4 while H + σ stays positive definite (1/4, 1/16,
     1/64; 1/256 < 0.01 is not) and the step stays below radius / 4; a small radius keeps σ."""
-    from crumple import minimize as mz
+    from crumple import minimize_direction as md
+    from crumple import minimize_state as ms
     from crumple.linalg import LDLT
 
     h = sp.csc_matrix(np.diag([1.0, -0.01]))
@@ -1865,15 +1866,15 @@ def test_lower_shift_takes_the_smallest_positive_definite_shift_that_fits_the_ra
     ldl = LDLT()
     f = ldl.factorize(h, shift=1.0 * m, floor=floor)
     p = -f.solve(g)
-    wide = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0, descents=4)
-    sigma, f2, p2 = mz._lower_shift(wide, ldl, h, g, m, 0.0, floor, 1.0, f, p)
+    wide = ms._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0, descents=4)
+    sigma, f2, p2 = md._lower_shift(wide, ldl, h, g, m, 0.0, floor, 1.0, f, p)
     assert sigma == 1.0 / 64 and f2.positive_definite
     assert np.allclose((h.toarray() + sigma * np.eye(2)) @ p2, -g)
     assert abs(p2[1]) > 10 * abs(p[1])  # a longer step along the soft direction
-    tight = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=2e-4, descents=4)
-    assert mz._lower_shift(tight, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
-    off = mz._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0)  # the projected one's
-    assert mz._lower_shift(off, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
+    tight = ms._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=2e-4, descents=4)
+    assert md._lower_shift(tight, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
+    off = ms._State(x=np.zeros(2), e=0.0, g=g, fmax=1e-4, radius=1.0)  # the projected one's
+    assert md._lower_shift(off, ldl, h, g, m, 0.0, floor, 1.0, f, p)[0] == 1.0
 
 
 @pytest.mark.parametrize("fixed", [None, np.array([False, False, False, True])])

@@ -27,20 +27,20 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse as sp
 
 from . import minimize_accurate
-from .linalg import CSC, LDLT
+from .linalg import LDLT
 from .minimize_accurate import (
     _accurate_check,
     _accurate_resolved,
     _recheck,
 )
 from .minimize_barriers import _barrier_step, _merged_rows
+from .minimize_direction import _direction
 from .minimize_fixed import _constrained, _constrained_action, _fixed_mask
 from .minimize_krylov import _accurate_spring_step, _accurate_step, _applies
 from .minimize_line import _line_search, resolution
-from .minimize_modes import _escape, _gauge_pin, _modes, _negative_count
+from .minimize_modes import _escape, _modes, _negative_count
 from .minimize_resolution import _force_resolution, _resolved
 from .minimize_result import MinimizeResult, _validate_common, all_finite, max_force
 from .minimize_state import _State
@@ -48,15 +48,9 @@ from .powell import powell, random_directions
 
 __all__ = ["MinimizeResult", "max_force", "newton", "powell", "random_directions", "resolution"]
 
-SKIP_MAX = 8
-#: Shifts σM :func:`_direction` tries on the fallback before it solves with the modified factor.
-SHIFTS = 60
-#: Once a shift σM makes the fallback positive definite, :func:`_lower_shift` tries σ divided
-#: by ``SHIFT_DESCENT``, up to ``SHIFT_DESCENTS`` times, while the step is shorter than the
-#: trust radius over ``SHIFT_ROOM`` (0: the first positive definite shift is kept).
+#: The default of ``newton(shift_descents=)``: how many times the fallback's shift is lowered
+#: once positive definite (:func:`crumple.minimize_direction._lower_shift`; 0: kept).
 SHIFT_DESCENTS = 0
-SHIFT_DESCENT = 4.0
-SHIFT_ROOM = 4.0
 
 
 def newton(
@@ -264,39 +258,13 @@ def newton(
     >>> r.converged, r.iterations, r.x.tolist()
     (True, 1, [0.0, 0.0])
     """
-    x = _validate_common(x0, ftol, maxiter)
-    if max_step is not None and not (max_step > 0):
-        raise ValueError(f"max_step must be positive, got {max_step}")
-    if not (math.isfinite(curvature_tol) and curvature_tol > 0):
-        raise ValueError(f"curvature_tol must be positive, got {curvature_tol}")
-    m = _metric(metric, x)
-    mask = _fixed_mask(fixed, x)
-    if mask is not None and retract is not None:
-        raise ValueError("retract cannot be combined with fixed rows (a curve can move them)")
-    if mask is not None:
-        fun, hess, hess_fallback = _constrained(mask, fun, hess, hess_fallback)
-        hess_action = _constrained_action(mask, hess_action)
-    if feasible is not None and not feasible(x):
-        raise ValueError("the starting point is not feasible")
-    e, g = fun(x)
-    if not math.isfinite(e):
-        raise ValueError(f"the energy at the starting point is {e}")
-    st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
-    st.radius = math.inf if max_step is None else float(max_step)
-    st.zero_modes = zero_modes
-    st.hess_action = hess_action
-    st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
-    st.accurate_steps = bool(accurate_steps)
-    st.springs_from_segment = bool(springs_from_segment)
-    st.springs_updates = bool(springs_updates)
-    if springs_solve_limit is not None and int(springs_solve_limit) < 0:
-        raise ValueError(f"springs_solve_limit must be >= 0 or None, got {springs_solve_limit!r}")
-    st.springs_solve_limit = None if springs_solve_limit is None else int(springs_solve_limit)
-    st.cut = cut
+    st, fun, hess, hess_fallback, m = _start(
+        fun, x0, hess, hess_fallback, ftol, maxiter, max_step, feasible, curvature_tol, metric,
+        zero_modes, fixed, hess_action, retract, shift_descents, accurate_steps,
+        springs_from_segment, springs_updates, springs_solve_limit, patience, cut,
+    )  # fmt: skip
     if patience is not None:
-        if int(patience) < 1:
-            raise ValueError(f"patience must be >= 1, got {patience!r}")
-        patience, st.best = int(patience), st.e
+        patience = int(patience)
     ldl = LDLT(points=(lambda: st.x if st.x.ndim == 2 else None) if order_by_points else None)
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
@@ -331,6 +299,47 @@ def newton(
         if callback is not None:
             callback(st.it, st.x, st.e, st.fmax)
     return _result(st, ldl, ftol, message)
+
+
+def _start(fun, x0, hess, hess_fallback, ftol, maxiter, max_step, feasible, curvature_tol,
+           metric, zero_modes, fixed, hess_action, retract, shift_descents, accurate_steps,
+           springs_from_segment, springs_updates, springs_solve_limit, patience, cut):  # fmt: skip
+    """:func:`newton`'s arguments checked and its state at the start: (state, fun, hess,
+    hess_fallback, metric), the three callables wrapped where rows are fixed."""
+    x = _validate_common(x0, ftol, maxiter)
+    if max_step is not None and not (max_step > 0):
+        raise ValueError(f"max_step must be positive, got {max_step}")
+    if not (math.isfinite(curvature_tol) and curvature_tol > 0):
+        raise ValueError(f"curvature_tol must be positive, got {curvature_tol}")
+    m = _metric(metric, x)
+    mask = _fixed_mask(fixed, x)
+    if mask is not None and retract is not None:
+        raise ValueError("retract cannot be combined with fixed rows (a curve can move them)")
+    if mask is not None:
+        fun, hess, hess_fallback = _constrained(mask, fun, hess, hess_fallback)
+        hess_action = _constrained_action(mask, hess_action)
+    if feasible is not None and not feasible(x):
+        raise ValueError("the starting point is not feasible")
+    e, g = fun(x)
+    if not math.isfinite(e):
+        raise ValueError(f"the energy at the starting point is {e}")
+    st = _State(x=x, e=float(e), g=g, fmax=max_force(g), mask=mask)
+    st.radius = math.inf if max_step is None else float(max_step)
+    st.zero_modes = zero_modes
+    st.hess_action = hess_action
+    st.descents = SHIFT_DESCENTS if shift_descents is None else int(shift_descents)
+    st.accurate_steps = bool(accurate_steps)
+    st.springs_from_segment = bool(springs_from_segment)
+    st.springs_updates = bool(springs_updates)
+    if springs_solve_limit is not None and int(springs_solve_limit) < 0:
+        raise ValueError(f"springs_solve_limit must be >= 0 or None, got {springs_solve_limit!r}")
+    st.springs_solve_limit = None if springs_solve_limit is None else int(springs_solve_limit)
+    st.cut = cut
+    if patience is not None:
+        if int(patience) < 1:
+            raise ValueError(f"patience must be >= 1, got {patience!r}")
+        st.best = st.e
+    return st, fun, hess, hess_fallback, m
 
 
 def _out_of_patience(st, patience) -> bool:
@@ -495,91 +504,6 @@ def _along(st) -> str:
         return ""
     return (f", {st.accurate_escapes} along the accurate Hessian product's mode, the assembled "
             "one's having given no step down")  # fmt: skip
-
-
-def _direction(st, hess, hess_fallback, ldl, floor, m) -> np.ndarray:
-    """The Newton step of the exact Hessian if it is positive definite, else a fallback's.
-
-    The fallback is ``hess_fallback`` (or H itself) shifted by σM, σ the smallest of 0, half
-    the last one, or twice the negative curvature its factor revealed, that makes it positive
-    definite (a Levenberg-Marquardt step in the metric M). A region of global negative
-    curvature (the buckling of a straight wire) keeps it: the shifted step moves far along the
-    unstable mode. After the exact Hessian has been found indefinite, the next ``st.skip``
-    iterations go straight to the fallback (1, 2, 4, 8 after successive failures; 0 after a
-    success), so that such a region costs about one factorisation per iteration.
-    """
-    g = st.g.ravel()
-    w = None  # the zero modes at x, evaluated once per direction
-    h = None  # the exact Hessian at x, where it was evaluated
-    if st.skip_left > 0:
-        st.skip_left -= 1
-    else:
-        st.nhev += 1
-        h = hess(st.x)
-        st.fres = _force_resolution(h, st.x)
-        f = ldl.factorize(h, floor=floor, trial=True)  # only used if it passes
-        pin = None
-        if f.modified and st.zero_modes is not None:  # indefinite along a zero mode only?
-            w = st.zero_modes(st.x)
-            pin = _gauge_pin(h, w)
-        if pin is not None:
-            f = ldl.factorize(h, shift=pin, floor=floor, trial=True)
-        if f.modified == 0:
-            st.skip = 0
-            st.factor, st.model, st.exact = f, _model_of(h, pin), True
-            return -f.solve(g).reshape(st.x.shape)
-        if hess_fallback is not None:
-            st.skip = min(max(1, 2 * st.skip), SKIP_MAX)
-            st.skip_left = st.skip
-    if h is None or (hess_fallback is not None and hess_fallback is not hess):
-        h = hess(st.x) if hess_fallback is None else hess_fallback(st.x)
-        st.nhev += 1
-    st.exact = False
-    hs = h if sp.issparse(h) or isinstance(h, CSC) else sp.csc_matrix(h)
-    if w is None and st.zero_modes is not None:
-        w = st.zero_modes(st.x)
-    pin = None if w is None else _gauge_pin(hs, w)
-    pin = 0.0 if pin is None else pin
-    sigma = 0.5 * st.sigma if st.sigma > 1e-300 else 0.0
-    for attempt in range(SHIFTS):  # the last one complete: its modified factor is the step's
-        f = ldl.factorize(hs, shift=sigma * m + pin, floor=floor, trial=attempt < SHIFTS - 1)
-        if f.modified == 0:
-            p = -f.solve(g)
-            if st.descents and sigma > 0.0:
-                sigma, f, p = _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p)
-            st.sigma = sigma
-            st.factor, st.model = f, _model_of(hs, sigma * m + pin)
-            return p.reshape(st.x.shape)
-        v = f.negative_direction()
-        mu = float(v @ (hs @ v) + v @ (pin * v)) / float(v @ (m * v)) if v is not None else 0.0
-        sigma = max(2.0 * sigma, -2.0 * mu, floor[0] / m[0])
-    st.sigma = sigma
-    st.factor, st.model = f, None
-    return -f.solve(g).reshape(st.x.shape)  # modified: still a descent direction
-
-
-def _lower_shift(st, ldl, hs, g, m, pin, floor, sigma, f, p):
-    """The shift lowered, by ``SHIFT_DESCENT`` at a time and ``st.descents`` times at most,
-    while the shifted step stays well inside the trust radius (its largest row displacement
-    below ``st.radius / SHIFT_ROOM``) and the lowered matrix is still positive definite: a
-    trust-region search for σ, which the doubling from half the last σ only overshoots.
-    Returns (σ, its factor, its step)."""
-    for _ in range(st.descents):
-        if not max_force(p.reshape(st.x.shape)) * SHIFT_ROOM < st.radius:
-            break
-        lower = sigma / SHIFT_DESCENT
-        trial = ldl.factorize(hs, shift=lower * m + pin, floor=floor, trial=True)
-        if trial.modified:
-            break
-        sigma, f, p = lower, trial, -trial.solve(g)
-    return sigma, f, p
-
-
-def _model_of(h, shift):
-    """(matrix, shift) of a factor, where the spring step can refactorise it (sparse)."""
-    if isinstance(h, CSC) or (sp.issparse(h) and h.format == "csc"):
-        return h, shift  # None or an array: the callers pass no scalar shift
-    return None
 
 
 def _metric(metric, x) -> np.ndarray:
