@@ -6,7 +6,18 @@ import numpy as np
 from numba import njit
 
 from ._input import _as_positions
-from .cells import _box_pairs, _build_hash, _cell, _cell_hash, _cell_size, _segment_boxes
+from .cells import (
+    CROWD,
+    _cell,
+    _cell_hash,
+    _chunked_hash,
+    _chunks_pay,
+    _fine_cell,
+    _grow,
+    _one_cell_hash,
+    _segment_boxes,
+    _segment_pairs,
+)
 from .crossings import _intersect
 
 # --------------------------------------------------------------------------------------------
@@ -46,8 +57,7 @@ def _segment_segment(pos, i, j):
 
 @njit(cache=True)
 def _close_pairs(pos, cutoff):
-    lox, loy, hix, hiy = _segment_boxes(pos, 0.5 * cutoff)
-    pairs = _box_pairs(lox, loy, hix, hiy, 2)
+    pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.5 * cutoff, 2)
     keep = np.empty(pairs.shape[0], dtype=np.bool_)
     dist = np.empty(pairs.shape[0])
     for k in range(pairs.shape[0]):
@@ -149,22 +159,24 @@ def turning_angles(positions) -> np.ndarray:
 
 
 @njit(cache=True)
-def _node_segment_pairs(pos, cutoff):
+def _node_segment_pairs(pos, cutoff, crowd=CROWD):
     """Pairs (node k, segment j) closer than ``cutoff`` whose segments are non-adjacent.
 
     Node k belongs to segments k - 1 and k; the pair is kept when segment j is non-adjacent
     (``|a - j| >= 2``) to at least one segment a that holds k. Each segment is inserted in every
     cell its box (padded by the cutoff) overlaps, so a node queries its own cell only and finds
     each pair once. The boxes are copied in table order so that a query reads memory
-    sequentially.
+    sequentially. Where that hash is more crowded than ``crowd`` (``cells.CROWD``), the
+    segments are hashed in chunks (:func:`_node_segment_pairs_chunked`): the same pairs, in the
+    same order.
     """
     n = pos.shape[0]
     ns = n - 1
     lox, loy, hix, hiy = _segment_boxes(pos, cutoff)
-    ox = lox.min()
-    oy = loy.min()
-    h = _cell_size(lox, loy, hix, hiy)
-    start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
+    h, ox, oy, start, item, cx, cy, mask = _one_cell_hash(lox, loy, hix, hiy)
+    if _chunks_pay(h, start, item, lox, loy, hix, hiy, crowd):
+        h = _fine_cell(lox, loy, hix, hiy)
+        return _node_segment_pairs_chunked(pos, cutoff, lox, loy, hix, hiy, h)
     m_tot = item.shape[0]
     ebox = np.empty((m_tot, 4))
     for e in range(m_tot):
@@ -204,6 +216,48 @@ def _node_segment_pairs(pos, cutoff):
             out_j[m] = j
             m += 1
     return out_k[:m], out_j[:m]
+
+
+@njit(cache=True)
+def _node_segment_pairs_chunked(pos, cutoff, lox, loy, hix, hiy, h):
+    """:func:`_node_segment_pairs` where its one-cell hash is crowded: the segments hashed in
+    chunks of extent at most h. A node queries its own cell, whose bucket lists each segment's
+    chunks together and the segments in increasing order, so that the pairs come out as from
+    the one-cell hash: the same pairs in the same order."""
+    n = pos.shape[0]
+    ns = n - 1
+    start, item, cx, cy, mask, ox, oy, owner, _, _, _, _, _ = _chunked_hash(
+        pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], cutoff, h
+    )
+    out = np.empty((max(16, n), 2), dtype=np.int64)
+    m = 0
+    for k in range(n):
+        px, py = pos[k, 0], pos[k, 1]
+        if px < ox or py < oy:
+            continue
+        ix = _cell(px, ox, h)
+        iy = _cell(py, oy, h)
+        bkt = _cell_hash(ix, iy, mask)
+        last = -1
+        for e in range(start[bkt], start[bkt + 1]):
+            if cx[e] != ix or cy[e] != iy:
+                continue
+            j = owner[item[e]]
+            if j == last:  # another chunk of the segment just met
+                continue
+            last = j
+            if px < lox[j] or px > hix[j] or py < loy[j] or py > hiy[j]:
+                continue
+            if not ((k >= 1 and abs(k - 1 - j) >= 2) or (k <= ns - 1 and abs(k - j) >= 2)):
+                continue
+            d = _point_segment(px, py, pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1])[0]
+            if d >= cutoff:
+                continue
+            out = _grow(out, m)
+            out[m, 0] = k
+            out[m, 1] = j
+            m += 1
+    return out[:m, 0].copy(), out[:m, 1].copy()
 
 
 def node_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from crumple.geometry import node_segment_pairs
-from crumple.geometry.cells import _build_hash, _cell, _cell_hash, _cell_size
+from crumple.geometry.cells import _segment_pairs
 from crumple.geometry.crossings import _orient
 
 __all__ = ["contact_links"]
@@ -147,77 +147,21 @@ def _overlap_from(sx, sy, ax, ay, bx, by):
 
 
 @njit(cache=True)
-def _link_box_pairs(lox, loy, hix, hiy, ns):
-    """Pairs (a, b), a < b, b >= ns (a link), of overlapping boxes, each once.
-
-    Like :func:`crumple.geometry._box_pairs` but queried from the links only: the segments
-    (indices < ns) are not paired with each other, which is most of the work there.
-
-    The cell walk below repeats ``geometry._box_pairs``' (the review's duplicate). Factoring
-    it needs a query-subset argument in geometry (``_box_pairs(..., first_query=ns)``), which
-    belongs to the geometry rewrite (issue 9); then this becomes one call.
-    """
-    ne = lox.shape[0]
-    out = np.empty((max(16, 4 * (ne - ns)), 2), dtype=np.int64)
-    m = 0
-    ox = lox.min()
-    oy = loy.min()
-    h = _cell_size(lox, loy, hix, hiy)
-    start, item, cx, cy, mask = _build_hash(lox, loy, hix, hiy, ox, oy, h)
-    for b in range(ns, ne):
-        x0 = _cell(lox[b], ox, h)
-        x1 = _cell(hix[b], ox, h)
-        y0 = _cell(loy[b], oy, h)
-        y1 = _cell(hiy[b], oy, h)
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                bk = _cell_hash(ix, iy, mask)
-                for k in range(start[bk], start[bk + 1]):
-                    a = item[k]
-                    if a == b or (a >= ns and a > b) or cx[k] != ix or cy[k] != iy:
-                        continue
-                    if lox[a] > hix[b] or lox[b] > hix[a] or loy[a] > hiy[b] or loy[b] > hiy[a]:
-                        continue
-                    if _cell(max(lox[a], lox[b]), ox, h) != ix:
-                        continue
-                    if _cell(max(loy[a], loy[b]), oy, h) != iy:
-                        continue
-                    if m == out.shape[0]:
-                        bigger = np.empty((2 * m, 2), dtype=np.int64)
-                        bigger[:m] = out
-                        out = bigger
-                    out[m, 0] = a
-                    out[m, 1] = b
-                    m += 1
-    return out[:m]
-
-
-@njit(cache=True)
 def _link_conflicts(pos, lk, lo, fx, fy, ll, lj):
     """Which links to drop: those touching the wire away from their ends, and those crossing a
     link that is not longer (of mutually crossing links the shortest stays)."""
     ns = pos.shape[0] - 1
     nl = lk.shape[0]
-    ne = ns + nl
-    lox = np.empty(ne)
-    loy = np.empty(ne)
-    hix = np.empty(ne)
-    hiy = np.empty(ne)
-    for i in range(ns):
-        lox[i] = min(pos[i, 0], pos[i + 1, 0])
-        hix[i] = max(pos[i, 0], pos[i + 1, 0])
-        loy[i] = min(pos[i, 1], pos[i + 1, 1])
-        hiy[i] = max(pos[i, 1], pos[i + 1, 1])
-    for q in range(nl):
-        k = lk[q]
-        lox[ns + q] = min(pos[k, 0], fx[q])
-        hix[ns + q] = max(pos[k, 0], fx[q])
-        loy[ns + q] = min(pos[k, 1], fy[q])
-        hiy[ns + q] = max(pos[k, 1], fy[q])
     drop = np.zeros(nl, dtype=np.bool_)
     if nl == 0:
         return drop
-    pairs = _link_box_pairs(lox, loy, hix, hiy, ns)
+    # the segments, then the links (node k to its foot): queried from the links only, the
+    # segments are not paired with each other
+    ax = np.concatenate((pos[:-1, 0], pos[lk, 0]))
+    ay = np.concatenate((pos[:-1, 1], pos[lk, 1]))
+    bx = np.concatenate((pos[1:, 0], fx))
+    by = np.concatenate((pos[1:, 1], fy))
+    pairs = _segment_pairs(ax, ay, bx, by, 0.0, 1, ns)
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]  # a < b, b a link
         q = b - ns
