@@ -41,6 +41,12 @@ def _cell(v, origin, h):
 
 
 @njit(cache=True)
+def _cells_of(lo_x, lo_y, hi_x, hi_y, ox, oy, h):
+    """The cells a box overlaps: (x0, x1, y0, y1), inclusive."""
+    return _cell(lo_x, ox, h), _cell(hi_x, ox, h), _cell(lo_y, oy, h), _cell(hi_y, oy, h)
+
+
+@njit(cache=True)
 def _cell_hash(ix, iy, mask):
     # Large odd multipliers (Teschner et al. 2003) spread neighbouring cells over the table.
     return ((ix * 73856093) ^ (iy * 19349663)) & mask
@@ -258,10 +264,7 @@ def _segment_pairs(ax, ay, bx, by, pad, min_gap, first=0, crowd=CROWD):
     # a pair is reported only from the cell holding the lower-left corner of the intersection
     # of the two boxes, which both boxes overlap: no duplicates, no misses
     for q in range(first, n):
-        x0 = _cell(lox[q], ox, h)
-        x1 = _cell(hix[q], ox, h)
-        y0 = _cell(loy[q], oy, h)
-        y1 = _cell(hiy[q], oy, h)
+        x0, x1, y0, y1 = _cells_of(lox[q], loy[q], hix[q], hiy[q], ox, oy, h)
         for ix in range(x0, x1 + 1):
             for iy in range(y0, y1 + 1):
                 b = _cell_hash(ix, iy, mask)
@@ -298,10 +301,7 @@ def _chunked_pairs(ax, ay, bx, by, pad, lox, loy, hix, hiy, min_gap, first, h):
     m = 0
     for q in range(first, n):
         for c in range(first_chunk[q], first_chunk[q + 1]):
-            x0 = _cell(clo_x[c], ox, h)
-            x1 = _cell(chi_x[c], ox, h)
-            y0 = _cell(clo_y[c], oy, h)
-            y1 = _cell(chi_y[c], oy, h)
+            x0, x1, y0, y1 = _cells_of(clo_x[c], clo_y[c], chi_x[c], chi_y[c], ox, oy, h)
             for ix in range(x0, x1 + 1):
                 for iy in range(y0, y1 + 1):
                     b = _cell_hash(ix, iy, mask)

@@ -192,9 +192,7 @@ def _node_segment_pairs(pos, cutoff, crowd=CROWD):
         px, py = pos[k, 0], pos[k, 1]
         if px < ox or py < oy:
             continue
-        ix = _cell(px, ox, h)
-        iy = _cell(py, oy, h)
-        bkt = _cell_hash(ix, iy, mask)
+        ix, iy, bkt = _bucket_of(px, py, ox, oy, h, mask)
         for e in range(start[bkt], start[bkt + 1]):
             if px < ebox[e, 0] or px > ebox[e, 1] or py < ebox[e, 2] or py > ebox[e, 3]:
                 continue
@@ -219,6 +217,14 @@ def _node_segment_pairs(pos, cutoff, crowd=CROWD):
 
 
 @njit(cache=True)
+def _bucket_of(px, py, ox, oy, h, mask):
+    """The cell of the point (px, py) >= the origin, and its bucket: (ix, iy, bucket)."""
+    ix = _cell(px, ox, h)
+    iy = _cell(py, oy, h)
+    return ix, iy, _cell_hash(ix, iy, mask)
+
+
+@njit(cache=True)
 def _node_segment_pairs_chunked(pos, cutoff, lox, loy, hix, hiy, h):
     """:func:`_node_segment_pairs` where its one-cell hash is crowded: the segments hashed in
     chunks of extent at most h. A node queries its own cell, whose bucket lists each segment's
@@ -235,9 +241,7 @@ def _node_segment_pairs_chunked(pos, cutoff, lox, loy, hix, hiy, h):
         px, py = pos[k, 0], pos[k, 1]
         if px < ox or py < oy:
             continue
-        ix = _cell(px, ox, h)
-        iy = _cell(py, oy, h)
-        bkt = _cell_hash(ix, iy, mask)
+        ix, iy, bkt = _bucket_of(px, py, ox, oy, h, mask)
         last = -1
         for e in range(start[bkt], start[bkt + 1]):
             if cx[e] != ix or cy[e] != iy:
