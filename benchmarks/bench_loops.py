@@ -14,6 +14,10 @@ loop count needs.
     python benchmarks/bench_loops.py --shapely  # also Shapely's node + polygonize (not a
                                                 # dependency: pip install shapely)
     python benchmarks/bench_loops.py --fan 4000,16000   # the review's fixed-angle spiral
+
+``--fan`` also runs the crossing search's candidate pairs (``geometry.cells._segment_pairs``)
+with the hash in one cell (``crowd=inf``, the hash of before the chunks) and as chosen
+(chunked: the spiral's segments crowd it), in the same process: their counts and times.
 """
 
 from __future__ import annotations
@@ -116,6 +120,37 @@ def time_fan(sizes, c: float = 1.2) -> None:
             print(f"{n:>7} {t1 - t0:>9.3f} {t2 - t1:>17.3f} {calls['conflicts']:>17.3f}")
     finally:
         lk_mod._link_conflicts = real
+    _fan_candidates(sizes)
+
+
+def _fan_candidates(sizes, c: float = 1.2) -> None:
+    """On the fixed-angle spiral, the one-cell hash against the chunked one in the same
+    process: the crossing search's candidate pairs, and the node-segment pairs within c (the
+    same pairs either way: checked)."""
+    from crumple.geometry.cells import _segment_pairs
+    from crumple.geometry.distance import _node_segment_pairs
+
+    def timed(fn, *args):
+        t0 = time.perf_counter()
+        out = fn(*args)
+        return out, time.perf_counter() - t0
+
+    def candidates(x, crowd):
+        a, b = np.ascontiguousarray(x[:-1]), np.ascontiguousarray(x[1:])
+        return timed(_segment_pairs, a[:, 0], a[:, 1], b[:, 0], b[:, 1], 0.0, 1, 0, crowd)
+
+    for crowd in (np.inf, 0.0):  # compile
+        candidates(fan(200), crowd), _node_segment_pairs(fan(200), c, crowd)
+    print(f"\n{'fan N':>7} {'candidates':>22} {'one-cell s':>10} {'chunked s':>9}"
+          f" {'node-segment pairs':>18} {'one-cell s':>10} {'chunked s':>9}")  # fmt: skip
+    for n in sizes:
+        x = fan(n)
+        (one, t1), (chunked, t2) = candidates(x, np.inf), candidates(x, 32.0)
+        (k1, j1), t3 = timed(_node_segment_pairs, x, c, np.inf)
+        (k2, j2), t4 = timed(_node_segment_pairs, x, c, 32.0)
+        assert np.array_equal(k1, k2) and np.array_equal(j1, j2)
+        print(f"{n:>7} {len(one):>10} / {len(chunked):>9} {t1:>10.3f} {t2:>9.3f} "
+              f"{len(k1):>18} {t3:>10.3f} {t4:>9.3f}")  # fmt: skip
 
 
 def main(argv=None) -> None:
