@@ -164,7 +164,10 @@ def _crowding_size(start, item, lox, loy, hix, hiy):
 def _chunks_pay(h, start, item, lox, loy, hix, hiy, crowd):
     """Whether to hash in chunks: the one-cell hash (cell h) is more crowded than ``crowd``, by
     boxes smaller than its cell over ``SPREAD`` (a finer cell then holds fewer of them; where
-    the crowding boxes are about the cell's size, a finer one only puts each in more cells)."""
+    the crowding boxes are about the cell's size, a finer one only puts each in more cells).
+    ``crowd`` <= 0: always; infinite: never."""
+    if crowd <= 0.0:  # always (the tests' switch)
+        return True
     if not _crowding(start, item.shape[0]) > crowd:
         return False
     return _crowding_size(start, item, lox, loy, hix, hiy) * SPREAD < h
@@ -172,11 +175,17 @@ def _chunks_pay(h, start, item, lox, loy, hix, hiy, crowd):
 
 @njit(cache=True)
 def _fine_cell(lox, loy, hix, hiy):
-    """The chunked hash's cell: the mean extent (the larger side) of the boxes over ``FINE``."""
+    """The chunked hash's cell: the mean extent (the larger side) of the boxes over ``FINE``,
+    and at least 4 times the widest margin :func:`_chunked_hash` may add to a chunk's box
+    (8 eps (|a| + |b|), at most 32 eps times the largest coordinate): segments a few ulps long
+    would otherwise have margins of hundreds of cells, each chunk in their square (found by
+    the review: a wire within 2 ulps of (1, 1) hung)."""
     total = 0.0
+    big = 0.0
     for i in range(lox.shape[0]):
         total += max(hix[i] - lox[i], hiy[i] - loy[i])
-    h = total / lox.shape[0] / FINE
+        big = max(big, abs(lox[i]), abs(loy[i]), abs(hix[i]), abs(hiy[i]))
+    h = max(total / lox.shape[0] / FINE, 4.0 * 32.0 * _EPS * big)
     return h if h > 0.0 else 1.0
 
 
