@@ -128,7 +128,7 @@ def _fan_candidates(sizes, c: float = 1.2) -> None:
     process: the crossing search's candidate pairs, and the node-segment pairs within c (the
     same pairs either way: checked)."""
     from crumple.geometry.cells import _segment_pairs
-    from crumple.geometry.distance import _node_segment_pairs
+    from crumple.geometry.distance import _node_segment_pairs_crowd
 
     def timed(fn, *args):
         t0 = time.perf_counter()
@@ -140,14 +140,14 @@ def _fan_candidates(sizes, c: float = 1.2) -> None:
         return timed(_segment_pairs, a[:, 0], a[:, 1], b[:, 0], b[:, 1], 0.0, 1, 0, crowd)
 
     for crowd in (np.inf, 0.0):  # compile
-        candidates(fan(200), crowd), _node_segment_pairs(fan(200), c, crowd)
+        candidates(fan(200), crowd), _node_segment_pairs_crowd(fan(200), c, crowd)
     print(f"\n{'fan N':>7} {'candidates':>22} {'one-cell s':>10} {'chunked s':>9}"
           f" {'node-segment pairs':>18} {'one-cell s':>10} {'chunked s':>9}")  # fmt: skip
     for n in sizes:
         x = fan(n)
         (one, t1), (chunked, t2) = candidates(x, np.inf), candidates(x, 32.0)
-        (k1, j1), t3 = timed(_node_segment_pairs, x, c, np.inf)
-        (k2, j2), t4 = timed(_node_segment_pairs, x, c, 32.0)
+        (k1, j1), t3 = timed(_node_segment_pairs_crowd, x, c, np.inf)
+        (k2, j2), t4 = timed(_node_segment_pairs_crowd, x, c, 32.0)
         assert np.array_equal(k1, k2) and np.array_equal(j1, j2)
         print(f"{n:>7} {len(one):>10} / {len(chunked):>9} {t1:>10.3f} {t2:>9.3f} "
               f"{len(k1):>18} {t3:>10.3f} {t4:>9.3f}")  # fmt: skip

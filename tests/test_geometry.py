@@ -778,13 +778,13 @@ def test_uneven_wires_hashed_in_chunks_find_what_one_cell_and_brute_force_find(
     cell (``crowd=inf``: never). The node-segment pairs are the same arrays both ways (the
     hard core's energy sums them in that order) and the brute force's; the candidate segment
     pairs hold every crossing and every pair closer than the cutoff, each once."""
-    from crumple.geometry.distance import _node_segment_pairs
+    from crumple.geometry.distance import _node_segment_pairs_crowd
 
     rng = np.random.default_rng(seed)
     pos = uneven_walk(rng, n, decades, turn)
     for cutoff in (2.0 * 10.0**-decades, 0.7 * float(np.median(segment_lengths(pos)))):
-        k, j = _node_segment_pairs(pos, cutoff, 0.0)
-        k1, j1 = _node_segment_pairs(pos, cutoff, np.inf)
+        k, j = _node_segment_pairs_crowd(pos, cutoff, 0.0)
+        k1, j1 = _node_segment_pairs_crowd(pos, cutoff, np.inf)
         assert np.array_equal(k, k1) and np.array_equal(j, j1)
         got = list(zip(k.tolist(), j.tolist(), strict=True))
         assert got == sorted(ref_node_segment_pairs(pos, cutoff))

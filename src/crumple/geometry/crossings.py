@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 
 from ._input import _as_positions
-from .cells import _segment_pairs
+from .cells import CROWD, _segment_pairs
 
 # Shewchuk's bound for orient2d: a float determinant larger than this (times the sum of the
 # magnitudes of its two products) has the right sign. eps = 2**-53 is the unit round-off.
@@ -106,7 +106,7 @@ def _fold_back(pos, i):
 @njit(cache=True)
 def _crossing_candidates(pos, stop_at_first):
     """Certain crossings and uncertain pairs (to be decided exactly), as index pairs."""
-    pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.0, 1)
+    pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.0, 1, 0, CROWD)
     hits = np.empty((pairs.shape[0], 2), dtype=np.int64)
     unsure = np.empty((pairs.shape[0], 2), dtype=np.int64)
     nh = 0

@@ -57,7 +57,8 @@ def _segment_segment(pos, i, j):
 
 @njit(cache=True)
 def _close_pairs(pos, cutoff):
-    pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.5 * cutoff, 2)
+    a0, a1, b0, b1 = pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1]
+    pairs = _segment_pairs(a0, a1, b0, b1, 0.5 * cutoff, 2, 0, CROWD)
     keep = np.empty(pairs.shape[0], dtype=np.bool_)
     dist = np.empty(pairs.shape[0])
     for k in range(pairs.shape[0]):
@@ -159,7 +160,14 @@ def turning_angles(positions) -> np.ndarray:
 
 
 @njit(cache=True)
-def _node_segment_pairs(pos, cutoff, crowd=CROWD):
+def _node_segment_pairs(pos, cutoff):
+    """:func:`_node_segment_pairs_crowd` at the default crowding (``cells.CROWD``). Its own
+    function, not a default argument: see ``cells._segment_pairs``."""
+    return _node_segment_pairs_crowd(pos, cutoff, CROWD)
+
+
+@njit(cache=True)
+def _node_segment_pairs_crowd(pos, cutoff, crowd):
     """Pairs (node k, segment j) closer than ``cutoff`` whose segments are non-adjacent.
 
     Node k belongs to segments k - 1 and k; the pair is kept when segment j is non-adjacent

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from crumple.geometry import node_segment_pairs
-from crumple.geometry.cells import _segment_pairs
+from crumple.geometry.cells import CROWD, _segment_pairs
 from crumple.geometry.crossings import _orient
 
 __all__ = ["contact_links"]
@@ -161,7 +161,7 @@ def _link_conflicts(pos, lk, lo, fx, fy, ll, lj):
     ay = np.concatenate((pos[:-1, 1], pos[lk, 1]))
     bx = np.concatenate((pos[1:, 0], fx))
     by = np.concatenate((pos[1:, 1], fy))
-    pairs = _segment_pairs(ax, ay, bx, by, 0.0, 1, ns)
+    pairs = _segment_pairs(ax, ay, bx, by, 0.0, 1, ns, CROWD)
     for p in range(pairs.shape[0]):
         a, b = pairs[p, 0], pairs[p, 1]  # a < b, b a link
         q = b - ns
