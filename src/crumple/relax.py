@@ -45,7 +45,8 @@ ACCURATE_STABILITY = True
 #: the curved point of each step, the chain with its segments turned
 #: (:func:`crumple.geometry.curved_step`), and keeps the lower energy; only where no contact
 #: acts (``WireEnergy.touching``). Measured (docs/performance.md, "Curved steps"): the default
-#: N = 100 ramp 2954 → 2105 iterations over seeds 0–3 (CPU −2 %), per node 16 866 → 8348 (CPU
+#: N = 100 ramp 2954 → 2105 iterations over seeds 0–3 (CPU −2 %; the twenty-fourth stop, seeds
+#: 0–5 with the other core busy: 29 % fewer iterations, CPU +26 %), per node 16 866 → 8348 (CPU
 #: −41 %), the smooth stages 137 → 38, the buckling stage 51 → 9, the N = 10⁴ ramp of the
 #: continuum wire (seed 0) 6224 → 5409 with every stage converged; off until the full
 #: reproduction and several seeds at N = 10³–10⁴ have been run with it (an earlier form lost

@@ -194,10 +194,11 @@ def _chunked_hash(ax, ay, bx, by, pad, h):
     """Segments a_i b_i cut into chunks of extent at most ``h``, each chunk's box padded by
     ``pad`` (and by a margin that covers the rounding of the chunks' ends), hashed with cell h.
 
-    Returns ``(start, item, cx, cy, mask, ox, oy, owner, first_chunk)``: as :func:`_build_hash`
-    over the chunks, with ``owner[c]`` the segment of chunk c and the chunks of segment i
-    ``first_chunk[i]:first_chunk[i + 1]`` (consecutive, so a bucket lists a cell's segments in
-    increasing order). A point within ``pad`` of segment i lies in the box of one of its chunks.
+    Returns ``(start, item, cx, cy, mask, ox, oy, owner, first_chunk, lox, loy, hix, hiy)``:
+    as :func:`_build_hash` over the chunks, with ``owner[c]`` the segment of chunk c, the
+    chunks of segment i ``first_chunk[i]:first_chunk[i + 1]`` (consecutive, so a bucket lists a
+    cell's segments in increasing order), and the chunks' boxes. A point within ``pad`` of
+    segment i lies in the box of one of its chunks.
     """
     n = ax.shape[0]
     first_chunk = np.zeros(n + 1, dtype=np.int64)
