@@ -57,6 +57,8 @@ def _sub(a, b):
 
 def _point_on_closed_segment(p, a, b) -> bool:
     ab, ap = _sub(b, a), _sub(p, a)
+    if ab == (0, 0):  # a zero-length segment: its one point
+        return ap == (0, 0)
     if _cross(ab, ap) != 0:
         return False
     return 0 <= _dot(ap, ab) <= _dot(ab, ab)
@@ -946,3 +948,110 @@ def test_curved_step_rejects_bad_input():
         curved_step(x[:2], np.zeros((3, 2)))
     with pytest.raises(ValueError, match="finite"):
         curved_step(x[:2], np.full((2, 2), np.nan))
+
+
+# --------------------------------------------------------------------------------------------
+# Exact orientation beyond the static bound, and the distances and links that use it
+# --------------------------------------------------------------------------------------------
+
+grid_points = st.lists(st.tuples(st.integers(0, 4), st.integers(0, 4)), min_size=4, max_size=12)
+
+
+def _ref_orientation(a, b, c) -> int:
+    det = _cross(_sub(_frac(b), _frac(a)), _sub(_frac(c), _frac(a)))
+    return (det > 0) - (det < 0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    pts=st.lists(st.tuples(st.integers(-3, 3), st.integers(-3, 3)), min_size=3, max_size=3),
+    scale=st.sampled_from([1.0, 1 / 3, 0.1, 7.3e5, 1e-9, 2.0**-60]),
+    shift=st.just(0.0) | st.floats(1e-3, 3) | st.floats(-3, -1e-3),  # not 1e-291: extreme
+    wiggle=st.integers(-3, 3),
+)
+def test_orient_sure_is_exact_on_collinear_and_nearly_collinear_triples(pts, scale, shift, wiggle):
+    """Grid triples (often collinear), scaled and shifted so that the differences and
+    products round, one coordinate moved by a few ulps: where the static bound cannot tell,
+    the expansion decides, and agrees with rational arithmetic."""
+    from crumple.geometry.crossings import _orient, _orient_sure
+
+    p = np.array(pts, dtype=float) * scale + shift
+    p[2, 0] += wiggle * np.spacing(max(abs(p[2, 0]), scale))  # not a subnormal's spacing
+    o, certain = _orient_sure(*p.ravel())
+    assert certain
+    assert o == _ref_orientation(*p)
+    fast, fast_certain = _orient(*p.ravel())
+    if fast_certain:
+        assert fast == o
+
+
+def test_orient_sure_on_the_diagonal_and_on_extreme_coordinates():
+    from crumple.geometry.crossings import _orient, _orient_sure
+
+    # exactly collinear, no zero factor: the static bound cannot tell, the expansion can
+    assert _orient(0.0, 0.0, 1.0, 1.0, 3.0, 3.0) == (0, False)
+    assert _orient_sure(0.0, 0.0, 1.0, 1.0, 3.0, 3.0) == (0, True)
+    tiny = 1e-300  # products of the parts underflow: left uncertain, not guessed
+    assert _orient_sure(0.0, 0.0, tiny, tiny, 3 * tiny, 3 * tiny) == (0, False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    pts=grid_points,
+    scale=st.sampled_from([1.0, 1 / 3, 7.3e5, 1e-140]),
+    shift=st.sampled_from([0.0, 0.1, -2.7]),
+    cutoff=st.sampled_from([0.5, 1.0, 2.5]),
+)
+def test_close_segment_pairs_exact_on_degenerate_grids(pts, scale, shift, cutoff):
+    """Integer grids (collinear segments, zero-length segments, shared and repeated nodes),
+    scaled and shifted: the pairs and distances are the exact reference's. Collinear
+    segments that do not touch used to be reported at distance 0 (an uncertain orientation
+    counted as meeting). At 1e-140 the products underflow and the pairs are decided in
+    rational arithmetic."""
+    pos = np.array(pts, dtype=float) * scale + shift * scale
+    cut = cutoff * scale
+    n = len(pos) - 1
+    want = {}
+    for i in range(n):
+        for j in range(i + 2, n):
+            d = ref_segment_distance(pos, i, j)
+            if d < cut:
+                want[(i, j)] = d
+    pairs, dist = close_segment_pairs(pos, cut)
+    got = {tuple(p): d for p, d in zip(pairs.tolist(), dist.tolist(), strict=True)}
+    border = {p for p, d in want.items() if abs(d - cut) < 1e-12 * scale}
+    assert set(got) - border == set(want) - border
+    for p in set(got) & set(want):
+        assert got[p] == pytest.approx(want[p], rel=1e-12, abs=1e-15 * scale)
+        if want[p] == 0.0:  # they meet, exactly (a far pair's distance may round to 0)
+            assert got[p] == 0.0
+        assert segment_distance(pos, *p) == got[p]
+
+
+def test_segment_distance_of_collinear_and_zero_length_segments():
+    diagonal = [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
+    assert segment_distance(diagonal, 0, 2) == pytest.approx(math.sqrt(2))
+    pairs, dist = close_segment_pairs(diagonal, 2.0)
+    assert pairs.tolist() == [[0, 2], [1, 3]]
+    assert dist == pytest.approx([math.sqrt(2)] * 2)
+    # segment 4 has zero length, at (5, 1): 2.83 from segment 0 (the line y = x)
+    wire = [[0, 0], [10, 10], [20, 0], [20, -5], [5, 1], [5, 1], [5, -3]]
+    pairs, dist = close_segment_pairs(wire, 1.0)
+    assert pairs.tolist() == [[3, 5]]  # they share the repeated node
+    assert segment_distance(wire, 0, 4) == pytest.approx(4 / math.sqrt(2))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    pts=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 4)), min_size=4, max_size=4),
+    scale=st.sampled_from([1.0, 1 / 3, 7.3e5]),
+    shift=st.sampled_from([0.0, 0.1]),
+)
+def test_links_meet_exactly(pts, scale, shift):
+    """The loops' link test (:func:`crumple.loops.links._segments_meet`) is the exact
+    intersection of closed segments: collinear disjoint links no longer conflict."""
+    from crumple.loops.links import _segments_meet
+
+    p = np.array(pts, dtype=float) * scale + shift
+    want = ref_segments_intersect(*(_frac(v) for v in p))
+    assert _segments_meet(*p.ravel()) == want

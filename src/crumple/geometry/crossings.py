@@ -1,4 +1,5 @@
-"""Exact segment intersection: Shewchuk's static bound, then rational arithmetic."""
+"""Exact segment intersection: Shewchuk's static bound, then exact expansions (compiled) or
+rational arithmetic."""
 
 from __future__ import annotations
 
@@ -42,6 +43,87 @@ def _orient(ax, ay, bx, by, cx, cy):
     return 0, False
 
 
+# Beyond the static bound: the determinant as an exact sum of floats (Shewchuk, "Adaptive
+# precision floating-point arithmetic and fast robust geometric predicates", 1997). Exact
+# while no product's error term underflows and nothing overflows, which these bounds ensure.
+_SPLITTER = 134217729.0  # 2**27 + 1: splits a double into two halves of 26 bits
+_EXACT_MAX = 1e150  # |a coordinate difference| above this: products may overflow
+_EXACT_TINY = 1e-270  # a nonzero product below this: its error term may underflow
+
+
+@njit(cache=True)
+def _two_sum(a, b):
+    """x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum; no ordering needed)."""
+    x = a + b
+    bv = x - a
+    av = x - bv
+    return x, (a - av) + (b - bv)
+
+
+@njit(cache=True)
+def _two_product(a, b):
+    """x + y = a b exactly, x = fl(a b) (Dekker's product by Veltkamp's split)."""
+    x = a * b
+    c = _SPLITTER * a
+    ahi = c - (c - a)
+    alo = a - ahi
+    c = _SPLITTER * b
+    bhi = c - (c - b)
+    blo = b - bhi
+    return x, alo * blo - (((x - ahi * bhi) - alo * bhi) - ahi * blo)
+
+
+@njit(cache=True)
+def _orient_expansion(ax, ay, bx, by, cx, cy):
+    """(sign, certain) of (a - c) x (b - c) = (ax - cx)(by - cy) - (ay - cy)(bx - cx), exact.
+
+    Each difference is two floats (TwoSum), each of the eight products of their parts two
+    more (TwoProduct): the determinant is exactly the sum of these 16 floats, which Shewchuk's
+    Grow-Expansion turns into a nonoverlapping expansion whose largest nonzero component has
+    the sum's sign. Not certain (0, False) only where a product could overflow (a difference
+    above 1e150) or its error term underflow (a nonzero product below 1e-270).
+    """
+    l1, l1t = _two_sum(ax, -cx)
+    l2, l2t = _two_sum(by, -cy)
+    r1, r1t = _two_sum(ay, -cy)
+    r2, r2t = _two_sum(bx, -cx)
+    if max(abs(l1), abs(l2), abs(r1), abs(r2)) > _EXACT_MAX:
+        return 0, False
+    left = ((l1, l2), (l1, l2t), (l1t, l2), (l1t, l2t))
+    right = ((r1, r2), (r1, r2t), (r1t, r2), (r1t, r2t))
+    terms = np.empty(16)
+    for k in range(4):
+        for side in range(2):
+            u, v = left[k] if side == 0 else right[k]
+            x, y = _two_product(u, v)
+            if u != 0.0 and v != 0.0 and abs(x) < _EXACT_TINY:
+                return 0, False
+            sign = 1.0 if side == 0 else -1.0
+            terms[4 * k + 2 * side] = sign * x
+            terms[4 * k + 2 * side + 1] = sign * y
+    e = np.empty(16)
+    for m in range(16):  # Grow-Expansion: e[:m] stays nonoverlapping, smallest first
+        q = terms[m]
+        for i in range(m):
+            q, e[i] = _two_sum(q, e[i])
+        e[m] = q
+    for i in range(15, -1, -1):
+        if e[i] != 0.0:
+            return (1 if e[i] > 0.0 else -1), True
+    return 0, True
+
+
+@njit(cache=True)
+def _orient_sure(ax, ay, bx, by, cx, cy):
+    """:func:`_orient`, with its uncertain signs decided exactly (:func:`_orient_expansion`):
+    uncertain only at extreme coordinates (parts of their differences below ~1e-135 in
+    magnitude, or differences above 1e150)."""
+    o, certain = _orient(ax, ay, bx, by, cx, cy)
+    if certain:
+        return o, True
+    return _orient_expansion(ax, ay, bx, by, cx, cy)
+
+
 @njit(cache=True)
 def _within(a, b, c):
     # c lies in the closed interval spanned by a and b (exact: comparisons only)
@@ -77,6 +159,20 @@ def _intersect(pos, i, j):
     o2, c2 = _orient(p1x, p1y, p2x, p2y, q2x, q2y)
     o3, c3 = _orient(q1x, q1y, q2x, q2y, p1x, p1y)
     o4, c4 = _orient(q1x, q1y, q2x, q2y, p2x, p2y)
+    if not (c1 and c2 and c3 and c4):
+        return False, False
+    return _decide(o1, o2, o3, o4, p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y), True
+
+
+@njit(cache=True)
+def _meet(p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y):
+    """(share a point, certain) for closed segments p1p2 and q1q2, by exact orientation signs
+    (:func:`_orient_sure`): uncertain only at extreme coordinates. Off the minimiser's path,
+    which keeps the static bound alone (:func:`_intersect`) and refuses what it cannot tell."""
+    o1, c1 = _orient_sure(p1x, p1y, p2x, p2y, q1x, q1y)
+    o2, c2 = _orient_sure(p1x, p1y, p2x, p2y, q2x, q2y)
+    o3, c3 = _orient_sure(q1x, q1y, q2x, q2y, p1x, p1y)
+    o4, c4 = _orient_sure(q1x, q1y, q2x, q2y, p2x, p2y)
     if not (c1 and c2 and c3 and c4):
         return False, False
     return _decide(o1, o2, o3, o4, p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y), True

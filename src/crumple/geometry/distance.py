@@ -18,7 +18,7 @@ from .cells import (
     _segment_boxes,
     _segment_pairs,
 )
-from .crossings import _intersect
+from .crossings import _intersect_exact, _meet
 
 # --------------------------------------------------------------------------------------------
 # Distances
@@ -41,30 +41,44 @@ def _point_segment(px, py, ax, ay, bx, by):
 
 @njit(cache=True)
 def _segment_segment(pos, i, j):
+    """(distance, certain) between segments i and j: 0 where they share a point, else the
+    least of the four end-to-segment distances (exact for disjoint segments in the plane).
+    Not certain only at extreme coordinates (:func:`crumple.geometry.crossings._meet`): the
+    distance is then the ends' and the caller decides the meeting exactly."""
     p1x, p1y, p2x, p2y = pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1]
     q1x, q1y, q2x, q2y = pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
-    hit, certain = _intersect(pos, i, j)
-    if hit or not certain:
-        # "not certain" means within round-off of touching: the distance is zero to
-        # working precision either way
-        return 0.0
+    hit, certain = _meet(p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y)
+    if hit:
+        return 0.0, True
     d = _point_segment(p1x, p1y, q1x, q1y, q2x, q2y)[0]
     d = min(d, _point_segment(p2x, p2y, q1x, q1y, q2x, q2y)[0])
     d = min(d, _point_segment(q1x, q1y, p1x, p1y, p2x, p2y)[0])
     d = min(d, _point_segment(q2x, q2y, p1x, p1y, p2x, p2y)[0])
-    return d
+    return d, certain
 
 
 @njit(cache=True)
 def _close_pairs(pos, cutoff):
+    """Candidate pairs within ``cutoff``, their distances, and which are not certain (kept
+    whatever their ends' distance, for :func:`_decided`)."""
     a0, a1, b0, b1 = pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1]
     pairs = _segment_pairs(a0, a1, b0, b1, 0.5 * cutoff, 2, 0, CROWD)
     keep = np.empty(pairs.shape[0], dtype=np.bool_)
     dist = np.empty(pairs.shape[0])
+    sure = np.empty(pairs.shape[0], dtype=np.bool_)
     for k in range(pairs.shape[0]):
-        dist[k] = _segment_segment(pos, pairs[k, 0], pairs[k, 1])
-        keep[k] = dist[k] < cutoff
-    return pairs[keep], dist[keep]
+        dist[k], sure[k] = _segment_segment(pos, pairs[k, 0], pairs[k, 1])
+        keep[k] = dist[k] < cutoff or not sure[k]
+    return pairs[keep], dist[keep], sure[keep]
+
+
+def _decided(pos, pairs, dist, sure):
+    """The distances with every uncertain pair decided in rational arithmetic (0 where the
+    segments meet)."""
+    for k in np.flatnonzero(~sure):
+        if _intersect_exact(pos, int(pairs[k, 0]), int(pairs[k, 1])):
+            dist[k] = 0.0
+    return dist
 
 
 def close_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
@@ -98,7 +112,10 @@ def close_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarra
         raise ValueError(f"cutoff must be a positive distance, got {cutoff}")
     if pos.shape[0] < 4:
         return np.empty((0, 2), dtype=np.int64), np.empty(0)
-    pairs, dist = _close_pairs(pos, float(cutoff))
+    pairs, dist, sure = _close_pairs(pos, float(cutoff))
+    dist = _decided(pos, pairs, dist, sure)
+    keep = dist < cutoff
+    pairs, dist = pairs[keep], dist[keep]
     order = np.lexsort((pairs[:, 1], pairs[:, 0]))
     return pairs[order], dist[order]
 
@@ -125,7 +142,8 @@ def segment_distance(positions, i: int, j: int) -> float:
     n = pos.shape[0] - 1
     if not (0 <= i < n and 0 <= j < n) or abs(i - j) < 2:
         raise ValueError(f"need two non-adjacent segments of {n}, got {i} and {j}")
-    return float(_segment_segment(pos, int(i), int(j)))
+    d, sure = _segment_segment(pos, int(i), int(j))
+    return float(_decided(pos, np.array([[i, j]]), np.array([d]), np.array([sure]))[0])
 
 
 def segment_lengths(positions) -> np.ndarray:

@@ -16,7 +16,7 @@ from numba import njit
 
 from crumple.geometry import node_segment_pairs
 from crumple.geometry.cells import CROWD, _segment_pairs
-from crumple.geometry.crossings import _orient
+from crumple.geometry.crossings import _meet, _orient_sure
 
 __all__ = ["contact_links"]
 
@@ -117,30 +117,16 @@ def _links(pos, cum, nodes, segs, cutoff):
 
 @njit(cache=True)
 def _segments_meet(ax, ay, bx, by, cx, cy, dx, dy):
-    """Closed segments ab and cd share a point, or round-off cannot tell (conservative)."""
-    o1, c1 = _orient(ax, ay, bx, by, cx, cy)
-    o2, c2 = _orient(ax, ay, bx, by, dx, dy)
-    o3, c3 = _orient(cx, cy, dx, dy, ax, ay)
-    o4, c4 = _orient(cx, cy, dx, dy, bx, by)
-    if not (c1 and c2 and c3 and c4):
-        return True
-    if o1 * o2 < 0 and o3 * o4 < 0:
-        return True
-    if o1 == 0 and min(ax, bx) <= cx <= max(ax, bx) and min(ay, by) <= cy <= max(ay, by):
-        return True
-    if o2 == 0 and min(ax, bx) <= dx <= max(ax, bx) and min(ay, by) <= dy <= max(ay, by):
-        return True
-    if o3 == 0 and min(cx, dx) <= ax <= max(cx, dx) and min(cy, dy) <= ay <= max(cy, dy):
-        return True
-    if o4 == 0 and min(cx, dx) <= bx <= max(cx, dx) and min(cy, dy) <= by <= max(cy, dy):
-        return True
-    return False
+    """Closed segments ab and cd share a point (exact signs), or extreme coordinates leave
+    it uncertain (conservative: counted as meeting)."""
+    hit, certain = _meet(ax, ay, bx, by, cx, cy, dx, dy)
+    return hit or not certain
 
 
 @njit(cache=True)
 def _overlap_from(sx, sy, ax, ay, bx, by):
     """Segments sa and sb, which share the end s, overlap beyond it (same ray)."""
-    o, certain = _orient(sx, sy, ax, ay, bx, by)
+    o, certain = _orient_sure(sx, sy, ax, ay, bx, by)
     if certain and o != 0:
         return False
     return (ax - sx) * (bx - sx) + (ay - sy) * (by - sy) > 0.0
