@@ -971,18 +971,47 @@ def _ref_orientation(a, b, c) -> int:
 )
 def test_orient_sure_is_exact_on_collinear_and_nearly_collinear_triples(pts, scale, shift, wiggle):
     """Grid triples (often collinear), scaled and shifted so that the differences and
-    products round, one coordinate moved by a few ulps: where the static bound cannot tell,
-    the expansion decides, and agrees with rational arithmetic."""
-    from crumple.geometry.crossings import _orient, _orient_sure
+    products round, one coordinate moved by a few ulps: the expansion alone, and the static
+    bound with the expansion behind it, agree with rational arithmetic."""
+    from crumple.geometry.crossings import _orient_expansion, _orient_sure
 
     p = np.array(pts, dtype=float) * scale + shift
     p[2, 0] += wiggle * np.spacing(max(abs(p[2, 0]), scale))  # not a subnormal's spacing
-    o, certain = _orient_sure(*p.ravel())
-    assert certain
-    assert o == _ref_orientation(*p)
-    fast, fast_certain = _orient(*p.ravel())
-    if fast_certain:
-        assert fast == o
+    want = _ref_orientation(*p)
+    assert _orient_expansion(*p.ravel()) == (want, True)
+    assert _orient_sure(*p.ravel()) == (want, True)
+
+
+magnitudes = st.sampled_from([1e-120, 1e-100, 1e-30, 1e-5, 1.0, 3e4, 1e40, 1e100, 1e140])
+
+
+@settings(max_examples=500, deadline=None)
+@given(
+    a=st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
+    b=st.tuples(st.floats(-1, 1), st.floats(-1, 1)),
+    t=st.floats(-2, 3),
+    scales=st.tuples(magnitudes, magnitudes),
+    wiggle=st.tuples(st.integers(-2, 2), st.integers(-2, 2)),
+)
+def test_orient_expansion_on_points_rounded_onto_a_line(a, b, t, scales, wiggle):
+    """c = a + t (b - a) in floating point, moved by a few ulps: a triple within round-off of
+    collinear, where the static bound almost never decides. At mixed magnitudes (a and b at
+    different scales) the differences' tails and the products' error terms all count."""
+    from crumple.geometry.crossings import _orient, _orient_expansion, _orient_sure
+
+    a = np.array(a) * scales[0]
+    b = np.array(b) * scales[1]
+    c = a + t * (b - a)
+    c = c + np.array(wiggle) * np.spacing(np.maximum(np.abs(c), 1e-130))
+    want = _ref_orientation(a, b, c)
+    coords = np.abs(np.r_[a, b, c])
+    if coords[coords > 0].min(initial=1.0) < 1e-127:  # parts' products may underflow
+        assert _orient_expansion(*a, *b, *c) in ((want, True), (0, False))
+        return
+    assert _orient_expansion(*a, *b, *c) == (want, True)
+    o, certain = _orient(*a, *b, *c)
+    assert _orient_sure(*a, *b, *c) == (want, True)
+    assert o == want or not certain
 
 
 def test_orient_sure_on_the_diagonal_and_on_extreme_coordinates():
@@ -991,8 +1020,16 @@ def test_orient_sure_on_the_diagonal_and_on_extreme_coordinates():
     # exactly collinear, no zero factor: the static bound cannot tell, the expansion can
     assert _orient(0.0, 0.0, 1.0, 1.0, 3.0, 3.0) == (0, False)
     assert _orient_sure(0.0, 0.0, 1.0, 1.0, 3.0, 3.0) == (0, True)
+    third = 3.0 + np.spacing(3.0)  # one ulp off the diagonal
+    assert _orient(0.0, 0.0, 1.0, 1.0, 3.0, third)[1] is False
+    assert _orient_sure(0.0, 0.0, 1.0, 1.0, 3.0, third) == (
+        _ref_orientation((0, 0), (1, 1), (3.0, third)),
+        True,
+    )
     tiny = 1e-300  # products of the parts underflow: left uncertain, not guessed
     assert _orient_sure(0.0, 0.0, tiny, tiny, 3 * tiny, 3 * tiny) == (0, False)
+    huge = 1e200  # products overflow: the same
+    assert _orient_sure(0.0, 0.0, huge, huge, 3 * huge, 3 * huge) == (0, False)
 
 
 @settings(max_examples=200, deadline=None)
@@ -1028,6 +1065,18 @@ def test_close_segment_pairs_exact_on_degenerate_grids(pts, scale, shift, cutoff
         assert segment_distance(pos, *p) == got[p]
 
 
+def test_crossing_segments_at_an_extreme_scale_are_decided_in_rationals():
+    """At 1e-150 the products of the parts underflow, so no sign is certain in compiled
+    code: a proper crossing whose ends are all farther than the cutoff from the other
+    segment must still come out at distance 0 (kept as uncertain, then decided exactly)."""
+    scale = 1e-150
+    x = np.array([[0, 0], [4, 4], [9, 9], [4, 0], [0, 4]], dtype=float) * scale
+    pairs, dist = close_segment_pairs(x, 0.5 * scale)  # segment 0 crosses segment 3
+    assert pairs.tolist() == [[0, 3]] and dist.tolist() == [0.0]
+    assert segment_distance(x, 0, 3) == 0.0
+    assert segment_distance(x, 0, 2) == pytest.approx(5 * math.sqrt(2) * scale, rel=1e-12)
+
+
 def test_segment_distance_of_collinear_and_zero_length_segments():
     diagonal = [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
     assert segment_distance(diagonal, 0, 2) == pytest.approx(math.sqrt(2))
@@ -1046,12 +1095,29 @@ def test_segment_distance_of_collinear_and_zero_length_segments():
     pts=st.lists(st.tuples(st.integers(0, 4), st.integers(0, 4)), min_size=4, max_size=4),
     scale=st.sampled_from([1.0, 1 / 3, 7.3e5]),
     shift=st.sampled_from([0.0, 0.1]),
+    wiggle=st.integers(-2, 2),
 )
-def test_links_meet_exactly(pts, scale, shift):
-    """The loops' link test (:func:`crumple.loops.links._segments_meet`) is the exact
-    intersection of closed segments: collinear disjoint links no longer conflict."""
-    from crumple.loops.links import _segments_meet
+def test_links_meet_exactly(pts, scale, shift, wiggle):
+    """The loops' link tests are exact: ``_segments_meet`` is the intersection of closed
+    segments (collinear disjoint links no longer conflict), and ``_overlap_from`` (two
+    segments from one end overlap) holds only for exactly collinear rays pointing the same
+    way, not for one moved by an ulp off the line."""
+    from crumple.loops.links import _overlap_from, _segments_meet
 
     p = np.array(pts, dtype=float) * scale + shift
-    want = ref_segments_intersect(*(_frac(v) for v in p))
-    assert _segments_meet(*p.ravel()) == want
+    p[3, 1] += wiggle * np.spacing(max(abs(p[3, 1]), 1.0))
+    f = [_frac(v) for v in p]
+    assert _segments_meet(*p.ravel()) == ref_segments_intersect(*f)
+    s, a, b = f[0], f[1], f[3]
+    same_ray = _cross(_sub(a, s), _sub(b, s)) == 0 and _dot(_sub(a, s), _sub(b, s)) > 0
+    assert _overlap_from(*p[0], *p[1], *p[3]) == same_ray
+
+
+def test_links_meet_conservatively_where_no_sign_is_certain():
+    """Beyond the exact signs' bounds a link is counted as meeting (dropped, never kept
+    across the wire): two disjoint collinear segments at 1e-150."""
+    from crumple.loops.links import _segments_meet
+
+    assert not _segments_meet(0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0)
+    t = 1e-150
+    assert _segments_meet(0.0, 0.0, t, t, 2 * t, 2 * t, 3 * t, 3 * t)

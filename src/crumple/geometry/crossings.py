@@ -1,5 +1,9 @@
-"""Exact segment intersection: Shewchuk's static bound, then exact expansions (compiled) or
-rational arithmetic."""
+"""Exact segment intersection: Shewchuk's static bound, then exact expansions or rationals.
+
+The minimiser's test (:func:`_intersect`) sends what the static bound cannot certify to
+rational arithmetic in Python; the observables' (:func:`_meet`) decide it in compiled exact
+expansions first.
+"""
 
 from __future__ import annotations
 
@@ -45,15 +49,19 @@ def _orient(ax, ay, bx, by, cx, cy):
 
 # Beyond the static bound: the determinant as an exact sum of floats (Shewchuk, "Adaptive
 # precision floating-point arithmetic and fast robust geometric predicates", 1997). Exact
-# while no product's error term underflows and nothing overflows, which these bounds ensure.
+# while no product's error term underflows and nothing overflows, which these bounds ensure:
+# a product of at least 1e-288 has its error term a multiple of at least 2**-1074 (TwoProduct
+# first fails below ~2e-292), and parts below 1e150 keep every product and split finite. The
+# kernels below rely on IEEE arithmetic as written: they must never be compiled with fastmath
+# (a fused multiply-add in the split breaks it).
 _SPLITTER = 134217729.0  # 2**27 + 1: splits a double into two halves of 26 bits
 _EXACT_MAX = 1e150  # |a coordinate difference| above this: products may overflow
-_EXACT_TINY = 1e-270  # a nonzero product below this: its error term may underflow
+_EXACT_TINY = 1e-288  # a nonzero product below this: its error term may underflow
 
 
 @njit(cache=True)
 def _two_sum(a, b):
-    """x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum; no ordering needed)."""
+    """x + y = a + b exactly, x = fl(a + b) (Knuth's TwoSum), barring overflow."""
     x = a + b
     bv = x - a
     av = x - bv
@@ -62,7 +70,8 @@ def _two_sum(a, b):
 
 @njit(cache=True)
 def _two_product(a, b):
-    """x + y = a b exactly, x = fl(a b) (Dekker's product by Veltkamp's split)."""
+    """x + y = a b exactly, x = fl(a b) (Dekker's product by Veltkamp's split), within the
+    bounds above (no overflow; |x| >= 1e-288 or a factor zero)."""
     x = a * b
     c = _SPLITTER * a
     ahi = c - (c - a)
@@ -75,13 +84,15 @@ def _two_product(a, b):
 
 @njit(cache=True)
 def _orient_expansion(ax, ay, bx, by, cx, cy):
-    """(sign, certain) of (a - c) x (b - c) = (ax - cx)(by - cy) - (ay - cy)(bx - cx), exact.
+    """(sign, certain) of (ax - cx)(by - cy) - (ay - cy)(bx - cx), in exact arithmetic.
 
-    Each difference is two floats (TwoSum), each of the eight products of their parts two
-    more (TwoProduct): the determinant is exactly the sum of these 16 floats, which Shewchuk's
-    Grow-Expansion turns into a nonoverlapping expansion whose largest nonzero component has
-    the sum's sign. Not certain (0, False) only where a product could overflow (a difference
-    above 1e150) or its error term underflow (a nonzero product below 1e-270).
+    Each difference is two floats (TwoSum). Where the four are exact and so are the two
+    products (integer coordinates, a pixel grid's), the sign is that of comparing the
+    products. Else each of the eight products of the parts is two more floats (TwoProduct):
+    the determinant is exactly the sum of these 16, which Shewchuk's Grow-Expansion turns into
+    a nonoverlapping expansion whose largest nonzero component has the sum's sign. Not
+    certain, (0, False), only outside the bounds above: a difference above 1e150, or a nonzero
+    product of parts below 1e-288.
     """
     l1, l1t = _two_sum(ax, -cx)
     l2, l2t = _two_sum(by, -cy)
@@ -89,6 +100,14 @@ def _orient_expansion(ax, ay, bx, by, cx, cy):
     r2, r2t = _two_sum(bx, -cx)
     if max(abs(l1), abs(l2), abs(r1), abs(r2)) > _EXACT_MAX:
         return 0, False
+    if l1t == 0.0 and l2t == 0.0 and r1t == 0.0 and r2t == 0.0:
+        x1, y1 = _two_product(l1, l2)
+        x2, y2 = _two_product(r1, r2)
+        small = (l1 != 0.0 and l2 != 0.0 and abs(x1) < _EXACT_TINY) or (
+            r1 != 0.0 and r2 != 0.0 and abs(x2) < _EXACT_TINY
+        )
+        if y1 == 0.0 and y2 == 0.0 and not small:
+            return (1 if x1 > x2 else (-1 if x1 < x2 else 0)), True
     left = ((l1, l2), (l1, l2t), (l1t, l2), (l1t, l2t))
     right = ((r1, r2), (r1, r2t), (r1t, r2), (r1t, r2t))
     terms = np.empty(16)
@@ -115,9 +134,12 @@ def _orient_expansion(ax, ay, bx, by, cx, cy):
 
 @njit(cache=True)
 def _orient_sure(ax, ay, bx, by, cx, cy):
-    """:func:`_orient`, with its uncertain signs decided exactly (:func:`_orient_expansion`):
-    uncertain only at extreme coordinates (parts of their differences below ~1e-135 in
-    magnitude, or differences above 1e150)."""
+    """:func:`_orient`, its uncertain signs decided exactly (:func:`_orient_expansion`).
+
+    Uncertain only beyond the expansion's bounds: differences above 1e150, or products of
+    their parts below 1e-288, which needs a nonzero coordinate below ~1e-128 in magnitude
+    (subnormals among them).
+    """
     o, certain = _orient(ax, ay, bx, by, cx, cy)
     if certain:
         return o, True
@@ -166,9 +188,11 @@ def _intersect(pos, i, j):
 
 @njit(cache=True)
 def _meet(p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y):
-    """(share a point, certain) for closed segments p1p2 and q1q2, by exact orientation signs
-    (:func:`_orient_sure`): uncertain only at extreme coordinates. Off the minimiser's path,
-    which keeps the static bound alone (:func:`_intersect`) and refuses what it cannot tell."""
+    """(share a point, certain) for closed segments p1p2 and q1q2, by exact signs.
+
+    The signs are :func:`_orient_sure`'s: uncertain only beyond its bounds. Off the
+    minimiser's path, which keeps the static bound alone (:func:`_intersect`).
+    """
     o1, c1 = _orient_sure(p1x, p1y, p2x, p2y, q1x, q1y)
     o2, c2 = _orient_sure(p1x, p1y, p2x, p2y, q2x, q2y)
     o3, c3 = _orient_sure(q1x, q1y, q2x, q2y, p1x, p1y)

@@ -41,10 +41,13 @@ def _point_segment(px, py, ax, ay, bx, by):
 
 @njit(cache=True)
 def _segment_segment(pos, i, j):
-    """(distance, certain) between segments i and j: 0 where they share a point, else the
-    least of the four end-to-segment distances (exact for disjoint segments in the plane).
-    Not certain only at extreme coordinates (:func:`crumple.geometry.crossings._meet`): the
-    distance is then the ends' and the caller decides the meeting exactly."""
+    """(distance, certain) between segments i and j, 0 where they share a point.
+
+    Else the least of the four end-to-segment distances, which is the distance of two
+    disjoint segments in the plane. Not certain only beyond the exact signs' bounds
+    (:func:`crumple.geometry.crossings._orient_sure`): the distance is then the ends' and the
+    caller decides the meeting in rational arithmetic.
+    """
     p1x, p1y, p2x, p2y = pos[i, 0], pos[i, 1], pos[i + 1, 0], pos[i + 1, 1]
     q1x, q1y, q2x, q2y = pos[j, 0], pos[j, 1], pos[j + 1, 0], pos[j + 1, 1]
     hit, certain = _meet(p1x, p1y, p2x, p2y, q1x, q1y, q2x, q2y)
@@ -59,8 +62,10 @@ def _segment_segment(pos, i, j):
 
 @njit(cache=True)
 def _close_pairs(pos, cutoff):
-    """Candidate pairs within ``cutoff``, their distances, and which are not certain (kept
-    whatever their ends' distance, for :func:`_decided`)."""
+    """Candidate pairs within ``cutoff``, their distances, and which are certain.
+
+    A pair not certain is kept whatever its ends' distance, for :func:`_decided`.
+    """
     a0, a1, b0, b1 = pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1]
     pairs = _segment_pairs(a0, a1, b0, b1, 0.5 * cutoff, 2, 0, CROWD)
     keep = np.empty(pairs.shape[0], dtype=np.bool_)
@@ -73,8 +78,7 @@ def _close_pairs(pos, cutoff):
 
 
 def _decided(pos, pairs, dist, sure):
-    """The distances with every uncertain pair decided in rational arithmetic (0 where the
-    segments meet)."""
+    """The distances, every uncertain pair decided in rational arithmetic (0: they meet)."""
     for k in np.flatnonzero(~sure):
         if _intersect_exact(pos, int(pairs[k, 0]), int(pairs[k, 1])):
             dist[k] = 0.0
@@ -84,7 +88,8 @@ def _decided(pos, pairs, dist, sure):
 def close_segment_pairs(positions, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
     """Pairs of non-adjacent segments closer than ``cutoff``, with their distances.
 
-    Non-adjacent means ``j >= i + 2``. Crossing segments have distance 0.
+    Non-adjacent means ``j >= i + 2``. Segments that share a point (crossing or touching,
+    decided exactly) have distance 0.
 
     Parameters
     ----------

@@ -117,8 +117,8 @@ def _links(pos, cum, nodes, segs, cutoff):
 
 @njit(cache=True)
 def _segments_meet(ax, ay, bx, by, cx, cy, dx, dy):
-    """Closed segments ab and cd share a point (exact signs), or extreme coordinates leave
-    it uncertain (conservative: counted as meeting)."""
+    """Closed segments ab and cd share a point (exact signs; where those cannot be had,
+    beyond :func:`crumple.geometry.crossings._orient_sure`'s bounds, counted as meeting)."""
     hit, certain = _meet(ax, ay, bx, by, cx, cy, dx, dy)
     return hit or not certain
 
