@@ -142,6 +142,8 @@ def segment_distance(positions, i: int, j: int) -> float:
 
     >>> segment_distance([[0, 0], [1, 0], [1, 0.1], [0, 0.1]], 0, 2)
     0.1
+    >>> segment_distance([[0, 0], [1, 1], [2, 2], [3, 3]], 0, 2)  # collinear, decided exactly
+    1.4142135623730951
     """
     pos = _as_positions(positions)
     n = pos.shape[0] - 1
