@@ -3,8 +3,9 @@
     python benchmarks/bench_scale.py ramp100         # default ramp N = 100: new vs landed
     python benchmarks/bench_scale.py smooth [N …] [curved=on|off]  # geomspace(1, 30, 12)
     python benchmarks/bench_scale.py scale 100 1000 [seed=0] [curved=on|off] [save=DIR]  # table
-    python benchmarks/bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2]  # stages
-                                                     # K … K2 in sequence from DIR's K - 1
+    python benchmarks/bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2] [log=F]
+                                  # stages K … K2 in sequence from DIR's K - 1; F: a line per
+                                  # Newton iteration (CPU, energy, max force), as it goes
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
@@ -226,7 +227,7 @@ def bench_scale(ns, seed=0, curved=None, save=None):
               f"{pairs}", flush=True)  # fmt: skip
 
 
-def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None):
+def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None, log=None):
     """Stages ``first`` … ``last`` (1-based) of the default schedule at N = ``n``, in sequence,
     the first re-minimised from the positions of stage first - 1 that ``scale … save=DIR``
     wrote (the ramp adds no noise between stages by default, so a single stage is the ramp's
@@ -234,7 +235,9 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None)
     iterations, passes, CPU, and the springs' solves (with the factor, and refactorised) with
     their CPU and how many found their active set; at the end the pairs in contact at the last
     stage and the process's peak memory. ``out``: a folder for each stage's
-    positions (None: none)."""
+    positions (None: none). ``log``: a file to which each Newton iteration appends a line
+    (stage, iteration, CPU since the stage began, energy, max force), flushed: the progress
+    of a stage that takes hours (None: none)."""
     from crumple.relax import minimize_wire
 
     ramp = Ramp(curved_steps=curved)
@@ -246,11 +249,12 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None)
     wire, total = continuum_wire(n), 0.0
     for k in range(first, last + 1):
         lam = ramp.lambdas[k - 1]
+        report = None if log is None else _iteration_line(log, k)
         with _springs_counted() as counts, threadpool_limits(limits=1, user_api="blas"):
-            res, t = cpu(lambda x=x, lam=lam: minimize_wire(
+            res, t = cpu(lambda x=x, lam=lam, report=report: minimize_wire(
                 wire, x, lam, method="newton", ftol=ramp.ftol, maxiter=ramp.maxiter,
                 max_step=ramp.max_step, curved_steps=ramp.curved_steps,
-                fallback=ramp.fallback))  # fmt: skip
+                fallback=ramp.fallback, callback=report))  # fmt: skip
         x, total = res.x.reshape(x.shape), total + t
         if out is not None:
             os.makedirs(out, exist_ok=True)
@@ -267,6 +271,18 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     print(f"  pairs in contact at stage {last}: {pairs} (d = {wire.hard_core:.0e}), max RSS "
           f"{rss:.2f} GiB", flush=True)  # fmt: skip
+
+
+def _iteration_line(path, stage):
+    """``minimize_wire``'s callback appending one line per iteration to ``path``."""
+    t0 = time.process_time()
+
+    def report(it, x, e, fmax):
+        with open(path, "a") as f:
+            f.write(f"stage {stage} it {it} cpu {time.process_time() - t0:.1f} energy {e:.15g} "
+                    f"max_force {fmax:.3e}\n")  # fmt: skip
+
+    return report
 
 
 @contextlib.contextmanager
@@ -682,10 +698,12 @@ if __name__ == "__main__":
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         args = [v for v in sys.argv[2:] if "=" not in v]
         if len(args) != 3:
-            raise SystemExit("usage: bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2]")
+            raise SystemExit(
+                "usage: bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2] [log=F]"
+            )
         first, _, last = args[1].partition("-")
         bench_stage(int(args[0]), int(first), int(last or first), args[2], _curved_flag(flags),
-                    flags.get("save"))  # fmt: skip
+                    flags.get("save"), flags.get("log"))  # fmt: skip
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]

@@ -22,7 +22,7 @@ import crumple.protocol as protocol
 import crumple.relax as relax
 from crumple.energy import WireEnergy
 from crumple.geometry import find_crossings, has_crossings, max_safe_fraction
-from crumple.minimize import MinimizeResult, resolution
+from crumple.minimize import MinimizeResult, max_force, resolution
 from crumple.model import Plasticity, Wire
 from crumple.protocol import (
     PAPER_LAMBDAS,
@@ -1136,3 +1136,31 @@ def test_the_releasing_springs_reach_equilibria_without_crossings(monkeypatch):
     assert all(not has_crossings(s.positions) for s in r.stages)
     assert r.stages[-1].energy.hard_core > 0  # the last stage is in contact
     assert sum(listed) > 0  # and the model was offered releasing springs on the way
+
+
+def test_minimize_wire_reports_every_accepted_step_with_its_positions():
+    """The callback sees each accepted point as positions (n_nodes, 2), with that point's
+    energy and largest force, in order, the last being the result; the energies it reports
+    never rise beyond the energy's resolution (an accepted step lowers it)."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=30)
+    x0 = initial_state(wire, seed=0)
+    seen = []
+    res = minimize_wire(
+        wire, x0, lam=300.0, callback=lambda it, x, e, f: seen.append((it, x.copy(), e, f))
+    )
+    assert res.converged and len(seen) >= 3
+    its = [s[0] for s in seen]
+    assert its == sorted(its) and its[-1] == res.iterations
+    energy = WireEnergy(wire, 300.0)
+    for _, x, e, f in seen:
+        assert x.shape == (wire.n_nodes, 2)
+        e_x, g_x = energy(x)
+        assert e == e_x and f == max_force(np.reshape(g_x, (-1, 2)))
+    energies = [s[2] for s in seen]
+    tol = resolution(energies[0])
+    assert all(b <= a + tol for a, b in itertools.pairwise(energies))
+    np.testing.assert_array_equal(seen[-1][1].ravel(), np.ravel(res.x))
+    assert seen[-1][2] == res.energy
+    with pytest.raises(ValueError, match="callback needs method='newton'"):
+        minimize_wire(wire, x0, lam=300.0, method="powell", rng=np.random.default_rng(0),
+                      callback=print)  # fmt: skip

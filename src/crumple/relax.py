@@ -172,6 +172,7 @@ def minimize_wire(
     anticipate_contacts: bool = True,
     curved_steps: bool | None = None,
     fallback: str | None = None,
+    callback=None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -227,6 +228,12 @@ def minimize_wire(
         Newton: the step where the exact Hessian is indefinite (:data:`FALLBACK`, the default,
         says what each is and what was measured). Like ``curved_steps``, it changes the path,
         not the criteria.
+    callback : callable, optional
+        Newton: ``callback(iteration, positions, energy, max_force)`` after every accepted
+        step (``positions`` of shape (wire.n_nodes, 2), a view: copy it to keep it), for
+        progress on stages that take minutes to hours at large N. Not called in the polish a
+        large wire may take at its force resolution (``crumple.relax_polish``), whose steps
+        are in the displacement from the end; its iterations are in the result's count.
 
     Examples
     --------
@@ -245,6 +252,8 @@ def minimize_wire(
         return (radius is None or _inside(x, radius)) and not _has_crossings(x)
 
     if method == "powell":
+        if callback is not None:
+            raise ValueError("callback needs method='newton'")
         if rng is None:
             raise ValueError("Powell needs a random generator for its directions (rng=...)")
         reach = POWELL_REACH * wire.rest_length
@@ -266,11 +275,21 @@ def minimize_wire(
         raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
     kw = _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts)
     kw.update(ftol=ftol, maxiter=maxiter, max_step=max_step, feasible=feasible)
-    res = newton(energy, x0, **kw)
+    report = None if callback is None else _positions_reported(callback)
+    res = newton(energy, x0, **kw, callback=report)
     # a stage that stopped at the force resolution of its positions: Newton again in the
     # displacement from its end, the elastic forces from the segments' sums (relax_polish)
     large = wire.n_segments > ACCURATE_STEPS_ABOVE
     return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
+
+
+def _positions_reported(callback):
+    """``newton``'s callback (flat x) as :func:`minimize_wire`'s (positions as (n, 2))."""
+
+    def report(it, x, e, fmax):
+        callback(it, x.reshape(-1, 2), e, fmax)
+
+    return report
 
 
 def _checked_start(wire: Wire, positions, fixed, method):
