@@ -237,7 +237,8 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None,
     stage and the process's peak memory. ``out``: a folder for each stage's
     positions (None: none). ``log``: a file to which each Newton iteration appends a line
     (stage, iteration, CPU since the stage began, energy, max force), flushed: the progress
-    of a stage that takes hours (None: none)."""
+    of a stage that takes hours (None: none). A saddle escape repeats the iteration number
+    before it; a closing polish is not logged (``minimize_wire``'s callback)."""
     from crumple.relax import minimize_wire
 
     ramp = Ramp(curved_steps=curved)

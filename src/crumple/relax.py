@@ -8,6 +8,7 @@ crossing test as the feasibility check, and stability judged per unit length.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -172,7 +173,7 @@ def minimize_wire(
     anticipate_contacts: bool = True,
     curved_steps: bool | None = None,
     fallback: str | None = None,
-    callback=None,
+    callback: Callable[[int, np.ndarray, float, float], None] | None = None,
 ) -> MinimizeResult:
     """Minimise the wire's energy at trap strength ``lam`` from ``positions``, never crossing.
 
@@ -230,11 +231,13 @@ def minimize_wire(
         not the criteria.
     callback : callable, optional
         Newton: ``callback(iteration, positions, energy, max_force)`` after every accepted
-        step (``positions`` of shape (wire.n_nodes, 2), a view: copy it to keep it), for
-        progress on stages that take minutes to hours at large N. Not called in the polish a
-        large wire may take at its force resolution (``crumple.relax_polish``), whose steps
-        are in the displacement from the end; its iterations are in the result's count.
-
+        step, for progress on stages that take minutes to hours at large N. ``positions``
+        (wire.n_nodes, 2) is the solver's own point, read-only (each step makes a new one, so
+        a reference stays valid). A saddle escape is reported under the number of the
+        iteration before it. Above ``ACCURATE_STEPS_ABOVE`` segments, a stage ended at its
+        force resolution goes on in a polish (``crumple.relax_polish``: steps in the
+        displacement from the end, then possibly a second pass in the positions) that is not
+        reported; its iterations are in the result's count, and its end is the result's ``x``.
     Examples
     --------
     >>> from crumple.protocol import initial_state
@@ -275,7 +278,7 @@ def minimize_wire(
         raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
     kw = _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts)
     kw.update(ftol=ftol, maxiter=maxiter, max_step=max_step, feasible=feasible)
-    report = None if callback is None else _positions_reported(callback)
+    report = None if callback is None else _read_only(callback)
     res = newton(energy, x0, **kw, callback=report)
     # a stage that stopped at the force resolution of its positions: Newton again in the
     # displacement from its end, the elastic forces from the segments' sums (relax_polish)
@@ -283,11 +286,13 @@ def minimize_wire(
     return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
 
 
-def _positions_reported(callback):
-    """``newton``'s callback (flat x) as :func:`minimize_wire`'s (positions as (n, 2))."""
+def _read_only(callback):
+    """``newton``'s callback with the point it is given made read-only: the solver's own."""
 
     def report(it, x, e, fmax):
-        callback(it, x.reshape(-1, 2), e, fmax)
+        view = x.view()
+        view.flags.writeable = False
+        callback(it, view, e, fmax)
 
     return report
 
