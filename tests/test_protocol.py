@@ -52,12 +52,12 @@ class StepAudit:
         self.calls = 0
         self.violations: list[str] = []
 
-    def __call__(self, fun, x0, **kwargs):
-        assert "callback" not in kwargs
+    def __call__(self, fun, x0, callback=None, **kwargs):
+        user = callback  # minimize_wire's own (None unless its caller gave one): still called
         self.calls += 1
         last = [fun(x0)[0]]
 
-        def callback(it, x, e, fmax):
+        def audit(it, x, e, fmax):
             self.steps += 1
             if e > last[0] + resolution(last[0]):
                 self.violations.append(f"call {self.calls} step {it}: E {last[0]!r} -> {e!r}")
@@ -67,8 +67,10 @@ class StepAudit:
                     f"call {self.calls} step {it}: crossings {crossings.tolist()}"
                 )
             last[0] = e
+            if user is not None:
+                user(it, x, e, fmax)
 
-        return self.real(fun, x0, callback=callback, **kwargs)
+        return self.real(fun, x0, callback=audit, **kwargs)
 
 
 def audited_ramp(wire, ramp, seed):
