@@ -150,7 +150,7 @@ def segment_distance(positions, i: int, j: int) -> float:
     if not (0 <= i < n and 0 <= j < n) or abs(i - j) < 2:
         raise ValueError(f"need two non-adjacent segments of {n}, got {i} and {j}")
     d, sure = _segment_segment(pos, int(i), int(j))
-    return float(_decided(pos, np.array([[i, j]]), np.array([d]), np.array([sure]))[0])
+    return 0.0 if not sure and _intersect_exact(pos, int(i), int(j)) else float(d)
 
 
 def segment_lengths(positions) -> np.ndarray:
