@@ -547,6 +547,53 @@ def test_the_time_left_weighs_the_stages_by_their_measured_costs():
     assert time_left(costs, {0: 5}, {0: 0}, 74.0, [1.0]) == 0.0  # nothing left
 
 
+def test_a_long_stage_reports_its_newton_iterations(monkeypatch, capsys):
+    """Within a stage that has run ITERATION_EVERY seconds, a replica reports its Newton
+    iterations (in this process to the callbacks, from a worker tagged through the queue);
+    a quick stage reports none, and the display names the stage, the iteration, its energy
+    and force, and the time spent in the stage."""
+    import queue
+
+    import crumple.cli.run as clirun
+    from crumple.protocol import Ramp, replica_seeds
+
+    wire, ramp = Wire(k_b=5, k_s=5e5, n_segments=20), Ramp(lambdas=(1.0, 300.0))
+    seed = replica_seeds(0, 1)[0]
+    stages, its = [], []
+    clirun._replica(wire, ramp, seed, 0, lambda *a: stages.append(a), lambda *a: its.append(a))
+    assert len(stages) == 2 and not its  # milliseconds per stage: nothing within them
+    monkeypatch.setattr(clirun, "ITERATION_EVERY", 0.0)
+    stages = []
+    res = clirun._replica(wire, ramp, seed, 0, lambda *a: stages.append(a),
+                          lambda *a: its.append(a))  # fmt: skip
+    assert [a[1] for a in stages] == [0, 1]
+    for i, stage in enumerate(res.stages):
+        mine = [a for a in its if a[1] == i]
+        numbers = [a[3] for a in mine]  # a saddle's escape repeats its iteration's number
+        assert numbers == sorted(numbers)
+        assert sorted(set(numbers)) == list(range(1, stage.result.iterations + 1))
+        assert all(a[0] == 0 and a[2] == stage.lam for a in mine)
+    quiet = []
+    clirun._replica(wire, ramp, seed, 0, lambda *a: None, lambda *a: quiet.append(a), False)
+    assert not quiet
+    monkeypatch.setattr(clirun, "_QUEUE", q := queue.Queue())
+    clirun._replica(wire, ramp, seed, 3)
+    kinds = []
+    while not q.empty():
+        kinds.append(q.get_nowait())
+    assert {k[0] for k in kinds} == {"stage", "iteration"} and all(k[1] == 3 for k in kinds)
+    assert kinds[-1][0] == "stage"
+
+    prog = _progress_at(monkeypatch, [0.0, 65.0, 200.0], 1, 2)
+    prog.every_iteration = 0.0  # a log's line at once (else at most every 30 s)
+    prog.stage(0, 0, 1.0, True)
+    prog.iteration(0, 1, 300.0, 17, 2.5, 0.125)
+    assert _last_line(capsys).strip() == (
+        "replica 0, stage 2/2 (λ = 300): Newton iteration 17, energy 2.5, max force 0.125, "
+        "2 min 15 s in this stage, 200 s elapsed"
+    )
+
+
 @pytest.mark.parametrize("dpi", [0, -3])
 def test_animate_refuses_a_dpi_below_one(capsys, tmp_path, ramp_file, dpi):
     code, out, err = run_cli(capsys, "animate", ramp_file, "-o", tmp_path / "a.gif", "--dpi", dpi)

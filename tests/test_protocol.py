@@ -1172,3 +1172,23 @@ def test_minimize_wire_reports_every_accepted_step_with_its_positions():
     with pytest.raises(ValueError, match="callback needs method='newton'"):
         minimize_wire(wire, x0, lam=300.0, method="powell", rng=np.random.default_rng(0),
                       callback=print)  # fmt: skip
+
+
+def test_a_ramp_reports_the_newton_steps_of_every_stage_without_changing_its_path():
+    """``run_ramp(iteration=...)`` sees every accepted step of every stage, tagged with the
+    stage's index and λ, the last of each being the stage's result; the path is the same, bit
+    for bit, as without it. Powell has no steps to report: asking is an error."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=30, rest_angle_sd=0.02)
+    ramp = Ramp(lambdas=(1.0, 30.0, 300.0))
+    plain = run_ramp(wire, ramp, seed=3)
+    seen = []
+    got = run_ramp(wire, ramp, seed=3, iteration=lambda *a: seen.append(a))
+    assert {s[0] for s in seen} == {0, 1, 2}
+    for i, (a, b) in enumerate(zip(plain.stages, got.stages, strict=True)):
+        np.testing.assert_array_equal(a.positions, b.positions)
+        mine = [s for s in seen if s[0] == i]
+        assert all(s[1] == b.lam for s in mine)
+        assert [s[2] for s in mine] == list(range(1, b.result.iterations + 1))
+        assert mine[-1][3:] == (b.result.energy, b.result.max_force)
+    with pytest.raises(ValueError, match="iteration needs method='newton'"):
+        run_ramp(wire, Ramp(lambdas=(1.0,), method="powell"), seed=0, iteration=print)

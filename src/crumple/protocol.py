@@ -316,6 +316,7 @@ def initial_state(wire: Wire, noise: float = 0.01, *, seed=None) -> np.ndarray:
 
 
 ProgressCallback = Callable[[int, int, Stage], None]
+IterationCallback = Callable[[int, float, int, float, float], None]
 
 
 def run_ramp(
@@ -324,6 +325,7 @@ def run_ramp(
     *,
     seed=None,
     progress: ProgressCallback | None = None,
+    iteration: IterationCallback | None = None,
 ) -> RampResult:
     """Run a quasi-static ramp: raise λ stage by stage, minimising at each.
 
@@ -336,6 +338,12 @@ def run_ramp(
         Source of the initial noise, the stage noise and Powell's directions.
     progress : callable, optional
         ``progress(i, n_stages, stage)`` after every stage.
+    iteration : callable, optional
+        ``iteration(i, lam, it, energy, max_force)`` after every accepted Newton step of
+        stage ``i`` (:func:`crumple.relax.minimize_wire`'s ``callback``, with its caveats):
+        progress within stages that take minutes to hours at large N. It sees no positions
+        and cannot change the path. Newton only: with ``ramp.method == "powell"`` it is an
+        error.
 
     Returns
     -------
@@ -351,14 +359,23 @@ def run_ramp(
     (True, 3)
     """
     ramp = Ramp() if ramp is None else ramp
+    if iteration is not None and ramp.method != "newton":
+        raise ValueError(f"iteration needs method='newton', got {ramp.method!r}")
     rng = _rng(seed)
     # one BLAS thread: the matrices are small, threads only contend (measured 7x slower with
     # two busy cores) and change the summation order, hence the trajectory, between machines
     with threadpool_limits(limits=1, user_api="blas"):
-        return _run_ramp(wire, ramp, rng, progress)
+        return _run_ramp(wire, ramp, rng, progress, iteration)
 
 
-def _run_ramp(wire, ramp, rng, progress):
+def _stage_callback(iteration, i, lam):
+    """``minimize_wire``'s callback that reports stage ``i``'s steps to ``iteration``."""
+    if iteration is None:
+        return None
+    return lambda it, x, energy, max_force: iteration(i, lam, it, energy, max_force)
+
+
+def _run_ramp(wire, ramp, rng, progress, iteration=None):
     t0 = time.perf_counter()
     # drawn first, and only for an imperfect wire, so that perfect wires keep their streams
     rest = rng.normal(0.0, wire.rest_angle_sd, wire.n_nodes - 2) if wire.rest_angle_sd else None
@@ -383,6 +400,7 @@ def _run_ramp(wire, ramp, rng, progress):
             rtol=ramp.powell_rtol,
             curved_steps=ramp.curved_steps,
             fallback=ramp.fallback,
+            callback=_stage_callback(iteration, i, lam),
         )
         moved = float(np.max(np.hypot(*(res.x - x).T)))
         x = res.x

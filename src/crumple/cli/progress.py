@@ -224,10 +224,20 @@ def time_left(costs: dict, ran: dict, left: dict, elapsed: float, recent: list) 
 class Progress:
     """Stages and replicas done, on stderr: one rewritten line on a terminal, else a line at
     most every ``every`` seconds, and one line per finished replica. The time left weighs each
-    remaining stage by what that stage cost in earlier replicas (:func:`time_left`)."""
+    remaining stage by what that stage cost in earlier replicas (:func:`time_left`). A stage
+    that runs long also reports its Newton iterations (:meth:`iteration`), in a log at most
+    every ``every_iteration`` seconds."""
 
-    def __init__(self, quiet: bool, n_replicas: int, n_stages: int, every: float = 5.0):
-        self.quiet, self.every = quiet, every
+    def __init__(
+        self,
+        quiet: bool,
+        n_replicas: int,
+        n_stages: int,
+        every: float = 5.0,
+        every_iteration: float = 30.0,
+    ):
+        self.quiet, self.every, self.every_iteration = quiet, every, every_iteration
+        self.width = 0  # the longest line rewritten on a terminal
         self.n_rep, self.n_stages = n_replicas, n_stages
         self.tty = sys.stderr.isatty()
         self.t0 = time.perf_counter()
@@ -240,13 +250,14 @@ class Progress:
         self.costs: dict[int, list[float]] = {}  # stage index -> the durations measured
         self.recent: list[float] = []  # the durations, in the order measured
 
-    def _write(self, line: str, force: bool = False) -> None:
+    def _write(self, line: str, force: bool = False, every: float | None = None) -> None:
         if self.quiet:
             return
         try:
             if self.tty:
-                sys.stderr.write(f"\r{line}   ")
-            elif force or time.monotonic() - self.last >= self.every:
+                self.width = max(self.width, len(line))
+                sys.stderr.write(f"\r{line.ljust(self.width)}   ")
+            elif force or time.monotonic() - self.last >= (self.every if every is None else every):
                 self.last = time.monotonic()
                 sys.stderr.write(line + "\n")
             sys.stderr.flush()
@@ -278,6 +289,20 @@ class Progress:
             f"  stage {done}/{total} (replica {r}: λ = {lam:.4g}){bad}, "
             f"{self.replicas_done}/{self.n_rep} replica(s) done, {elapsed:.0f} s elapsed, "
             f"~{eta:.0f} s left"
+        )
+
+    def iteration(
+        self, r: int, i: int, lam: float, it: int, energy: float, max_force: float
+    ) -> None:
+        """Replica r's stage i is still running: its last Newton iteration."""
+        elapsed = time.perf_counter() - self.t0
+        start = self.finished.get(r, 0.0 if self.replicas_done == 0 and i == 0 else None)
+        since = "" if start is None else f", {duration(elapsed - start)} in this stage"
+        self._write(
+            f"  replica {r}, stage {i + 1}/{self.n_stages} (λ = {lam:.4g}): Newton iteration "
+            f"{it}, energy {energy:.10g}, max force {max_force:.3g}{since}, {elapsed:.0f} s "
+            "elapsed",
+            every=self.every_iteration,
         )
 
     def replica(self, r: int, result) -> None:

@@ -236,30 +236,52 @@ def _init_worker(queue) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
-def _replica(wire, ramp, seed_seq, r: int, on_stage=None):
+#: Seconds a stage runs before it reports its Newton iterations, and then between reports: a
+#: stage at N = 100 takes milliseconds and reports none; one at N = 10⁵ runs for hours.
+ITERATION_EVERY = 2.0
+
+
+def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, iterations=True):
+    """Replica ``r``: its stages (and, while a stage runs for more than
+    :data:`ITERATION_EVERY` seconds, its Newton iterations) go to ``on_stage`` and
+    ``on_iteration`` in this process, or tagged through the workers' queue."""
     from ..protocol import run_ramp
 
-    def progress(i, n, stage):
-        msg = (r, i, stage.lam, stage.result.converged)
-        if on_stage is not None:
-            on_stage(*msg)
+    def send(msg, local):
+        if local is not None:
+            local(*msg[1:])
         elif _QUEUE is not None:
             _QUEUE.put(msg)
 
+    last = [time.monotonic()]  # the last stage's end or the last iteration reported
+
+    def progress(i, n, stage):
+        last[0] = time.monotonic()
+        send(("stage", r, i, stage.lam, stage.result.converged), on_stage)
+
+    def iteration(i, lam, it, energy, max_force):
+        now = time.monotonic()
+        if now - last[0] >= ITERATION_EVERY:
+            last[0] = now
+            send(("iteration", r, i, lam, it, energy, max_force), on_iteration)
+
+    within = iteration if iterations and ramp.method == "newton" else None
     # as crumple.protocol.run_replicas: replica r uses SeedSequence(seed).spawn(n)[r]
-    return run_ramp(wire, ramp, seed=np.random.default_rng(seed_seq), progress=progress)
+    rng = np.random.default_rng(seed_seq)
+    return run_ramp(wire, ramp, seed=rng, progress=progress, iteration=within)
 
 
 def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, done: dict) -> None:
     """Run the replicas, filling ``done[r]`` as each finishes. With several workers, worker
-    processes report every stage through a queue; on any exception (KeyboardInterrupt,
-    :class:`Terminated`) they are terminated before it propagates."""
+    processes report every stage (and the iterations of long stages) through a queue; on any
+    exception (KeyboardInterrupt, :class:`Terminated`) they are terminated before it
+    propagates."""
     from ..protocol import replica_seeds
 
     seeds = replica_seeds(seed, n_rep)
     if workers == 1:
         for r in range(n_rep):
-            done[r] = _replica(wire, ramp, seeds[r], r, on_stage=prog.stage)
+            done[r] = _replica(wire, ramp, seeds[r], r, prog.stage, prog.iteration, not prog.quiet)
             prog.replica(r, done[r])
         return
     import multiprocessing as mp
@@ -270,11 +292,13 @@ def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, don
     q = ctx.Queue()
     pool = ctx.Pool(workers, initializer=_init_worker, initargs=(q,))
     try:
-        pending = {r: pool.apply_async(_replica, (wire, ramp, seeds[r], r)) for r in range(n_rep)}
+        job = [(wire, ramp, seeds[r], r, None, None, not prog.quiet) for r in range(n_rep)]
+        pending = {r: pool.apply_async(_replica, job[r]) for r in range(n_rep)}
         while pending:
             try:
                 while True:
-                    prog.stage(*q.get(timeout=0.2))
+                    kind, *msg = q.get(timeout=0.2)
+                    (prog.stage if kind == "stage" else prog.iteration)(*msg)
             except queue_mod.Empty:
                 pass
             for r in [r for r, a in pending.items() if a.ready()]:
