@@ -547,51 +547,110 @@ def test_the_time_left_weighs_the_stages_by_their_measured_costs():
     assert time_left(costs, {0: 5}, {0: 0}, 74.0, [1.0]) == 0.0  # nothing left
 
 
-def test_a_long_stage_reports_its_newton_iterations(monkeypatch, capsys):
-    """Within a stage that has run ITERATION_EVERY seconds, a replica reports its Newton
-    iterations (in this process to the callbacks, from a worker tagged through the queue);
-    a quick stage reports none, and the display names the stage, the iteration, its energy
-    and force, and the time spent in the stage."""
+def test_a_long_stage_reports_its_newton_iterations(monkeypatch):
+    """Once a stage has run ITERATION_EVERY seconds, a replica reports its Newton iterations
+    at most that often, with the seconds the stage has run (in this process to the
+    callbacks, from a worker tagged through the queue); a quick stage reports none, nor does
+    a run asked to be quiet."""
     import queue
 
     import crumple.cli.run as clirun
     from crumple.protocol import Ramp, replica_seeds
 
-    wire, ramp = Wire(k_b=5, k_s=5e5, n_segments=20), Ramp(lambdas=(1.0, 300.0))
-    seed = replica_seeds(0, 1)[0]
+    wire = Wire(k_b=5, k_s=5e5, n_segments=30, rest_angle_sd=0.02)
+    ramp, seed = Ramp(lambdas=(1.0, 30.0, 300.0)), replica_seeds(3, 1)[0]
     stages, its = [], []
-    clirun._replica(wire, ramp, seed, 0, lambda *a: stages.append(a), lambda *a: its.append(a))
-    assert len(stages) == 2 and not its  # milliseconds per stage: nothing within them
-    monkeypatch.setattr(clirun, "ITERATION_EVERY", 0.0)
-    stages = []
-    res = clirun._replica(wire, ramp, seed, 0, lambda *a: stages.append(a),
-                          lambda *a: its.append(a))  # fmt: skip
-    assert [a[1] for a in stages] == [0, 1]
-    for i, stage in enumerate(res.stages):
+    res = clirun._replica(wire, ramp, seed, 0, lambda *a: stages.append(a), its.append)
+    assert [a[1] for a in stages] == [0, 1, 2] and not its  # milliseconds: nothing within
+    tick = iter(range(10**6))  # a clock that moves one second per reading
+    monkeypatch.setattr(clirun, "_clock", lambda: float(next(tick)))
+    again = clirun._replica(wire, ramp, seed, 0, lambda *a: None, lambda *a: its.append(a))
+    for i, (s1, s2) in enumerate(zip(res.stages, again.stages, strict=True)):
+        np.testing.assert_array_equal(s1.positions, s2.positions)
         mine = [a for a in its if a[1] == i]
-        numbers = [a[3] for a in mine]  # a saddle's escape repeats its iteration's number
-        assert numbers == sorted(numbers)
-        assert sorted(set(numbers)) == list(range(1, stage.result.iterations + 1))
-        assert all(a[0] == 0 and a[2] == stage.lam for a in mine)
+        # one reading per step: every second step is 2 s after the last report or the start
+        assert [a[3] for a in mine] == list(range(2, s2.result.iterations + 1, 2))
+        assert all(a[0] == 0 and a[2] == s2.lam and a[6] == a[3] for a in mine)
+    last = [a for a in its if a[1] == 2][-1]
+    assert last[4] == pytest.approx(res.stages[2].result.energy, rel=1e-3)  # energy, then
+    assert 0 <= last[5] < 1e-3 * last[4]  # the largest force, of a step near the stage's end
     quiet = []
     clirun._replica(wire, ramp, seed, 0, lambda *a: None, lambda *a: quiet.append(a), False)
     assert not quiet
     monkeypatch.setattr(clirun, "_QUEUE", q := queue.Queue())
     clirun._replica(wire, ramp, seed, 3)
-    kinds = []
+    sent = []
     while not q.empty():
-        kinds.append(q.get_nowait())
-    assert {k[0] for k in kinds} == {"stage", "iteration"} and all(k[1] == 3 for k in kinds)
-    assert kinds[-1][0] == "stage"
+        sent.append(q.get_nowait())
+    assert {m[0] for m in sent} == {"stage", "iteration"} and all(m[1] == 3 for m in sent)
+    assert len([m for m in sent if m[0] == "stage"]) == 3
 
-    prog = _progress_at(monkeypatch, [0.0, 65.0, 200.0], 1, 2)
-    prog.every_iteration = 0.0  # a log's line at once (else at most every 30 s)
-    prog.stage(0, 0, 1.0, True)
-    prog.iteration(0, 1, 300.0, 17, 2.5, 0.125)
+
+def test_worker_messages_reach_the_display_by_their_kind():
+    import crumple.cli.run as clirun
+
+    class Seen:
+        def __init__(self):
+            self.calls = []
+
+        def stage(self, *a):
+            self.calls.append(("stage", len(a)))
+
+        def iteration(self, *a):
+            self.calls.append(("iteration", len(a)))
+
+    prog = Seen()
+    clirun._dispatch(prog, ("stage", 0, 1, 10.0, True))
+    clirun._dispatch(prog, ("iteration", 0, 1, 10.0, 5, 1.5, 0.2, 3.0))
+    assert prog.calls == [("stage", 4), ("iteration", 7)]
+    with pytest.raises(ValueError, match="unknown progress message"):
+        clirun._dispatch(prog, ("done", 0))
+
+
+def test_the_iteration_line_names_the_stage_the_step_and_the_target(monkeypatch, capsys):
+    prog = _progress_at(monkeypatch, [0.0, 65.0, 200.0, 201.0], 1, 2)
+    prog.ftol, prog.maxiter, prog.every_iteration = 1e-6, 5000, 0.0
+    prog.stage(0, 0, 1.0, False)
+    prog.iteration(0, 1, 300.0, 17, 2.5, 0.125, 135.0)
     assert _last_line(capsys).strip() == (
-        "replica 0, stage 2/2 (λ = 300): Newton iteration 17, energy 2.5, max force 0.125, "
-        "2 min 15 s in this stage, 200 s elapsed"
+        "replica 0, stage 2/2 (λ = 300), 2 min 15 s in: iteration 17 (max 5000), energy 2.5, "
+        "max force 0.125 (ftol 1e-06) [energy/length], 1 NOT converged; 3 min 20 s elapsed"
     )
+
+
+def test_a_log_shows_stages_and_iterations_each_at_its_own_interval(monkeypatch, capsys):
+    from crumple.cli.run import Progress
+
+    prog = Progress(quiet=False, n_replicas=1, n_stages=3, every=5.0, every_iteration=30.0)
+    now = [0.0]
+    prog.clock = lambda: now[0]
+    shown = []
+    for t, call in [(0, "s"), (1, "i"), (20, "i"), (3, "s"), (6, "s"), (31, "i"), (40, "i")]:
+        now[0] = float(t)
+        if call == "s":
+            prog.stage(0, 0, 1.0, True)
+        else:
+            prog.iteration(0, 1, 10.0, 7, 1.0, 0.5, 1.0)
+        out = capsys.readouterr().err
+        shown.append(bool(out))
+    assert shown == [True, True, False, False, True, True, False]
+
+
+def test_a_terminal_line_is_erased_and_cut_to_the_width(monkeypatch, capsys):
+    import os
+
+    from crumple.cli.run import Progress
+
+    prog = Progress(quiet=False, n_replicas=1, n_stages=3)
+    prog.tty = True
+    monkeypatch.setattr("shutil.get_terminal_size", lambda *a: os.terminal_size((40, 20)))
+    prog.iteration(0, 1, 10.0, 7, 1.0, 0.5, 1.0)
+    prog.stage(0, 1, 10.0, True)
+    out = capsys.readouterr().err
+    parts = out.split("\r\x1b[K")
+    assert parts[0] == "" and len(parts) == 3
+    assert all(0 < len(p) <= 39 for p in parts[1:])
+    assert parts[1].startswith("  replica 0, stage 2/3") and parts[2].startswith("  stage 2/3")
 
 
 @pytest.mark.parametrize("dpi", [0, -3])

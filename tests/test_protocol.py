@@ -682,7 +682,10 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
 
     wire = Wire.from_continuum(**CONTINUUM, n_segments=2000)
     x = run_ramp(wire, Ramp(lambdas=SMOOTH.lambdas[:8]), seed=0).stages[-1].positions
-    polished = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    seen = []
+    polished = relax.minimize_wire(
+        wire, x, 10.0, ftol=1e-9, callback=lambda *a: seen.append((a[0], a[1].copy(), *a[2:]))
+    )
     assert polished.converged and polished.max_force <= 1e-9, polished.message
     assert "polished in the displacement" in polished.message
     monkeypatch.setattr(rp, "POLISH", False)
@@ -690,6 +693,11 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
     assert "converged to the force resolution" in first.message
     assert first.max_force > 1e-7 and first.force_resolution > 1e-9
     assert polished.iterations - first.iterations in (1, 2, 3)
+    # the callback saw both passes, the polish's iterations counted on, its end the result
+    assert [s[0] for s in seen] == list(range(1, polished.iterations + 1))
+    assert seen[first.iterations - 1][2] == first.energy
+    np.testing.assert_array_equal(seen[-1][1], polished.x)
+    assert seen[-1][2:] == (polished.energy, polished.max_force)
     assert abs(polished.energy - first.energy) <= 1e-12 * abs(first.energy)
     assert float(np.max(np.hypot(*(polished.x - first.x).T))) < 1e-6
     assert not has_crossings(polished.x)
@@ -735,6 +743,22 @@ def test_the_polish_stops_where_it_no_longer_makes_progress(monkeypatch):
     short = relax.minimize_wire(wire, x, 10.0, ftol=1e-9, maxiter=first.iterations + 2)
     assert given[-1] == (2, rp.POLISH_PATIENCE)  # the stage's budget, where less is left of it
     assert short.iterations <= first.iterations + 2
+
+
+def test_the_retry_after_a_polish_reports_its_steps_counted_on():
+    """The retry (Newton in the coordinates from a polish's end) reports its accepted steps to
+    the stage's callback under the stage's running iteration count, its own points."""
+    import crumple.relax_polish as rp
+
+    seen = []
+    kw = {"hess": lambda x: 2 * np.eye(3), "maxiter": 50}
+    x0 = np.array([1.0, -2.0, 0.5])
+    res = rp._retried(lambda x: (float(x @ x), 2 * x), x0, kw, {"iterations": 7},
+                      lambda it, x, e, f: seen.append((it, x.copy(), e)))  # fmt: skip
+    assert res.converged and [s[0] for s in seen] == list(range(8, 8 + res.iterations))
+    np.testing.assert_array_equal(seen[-1][1], res.x)
+    assert seen[-1][2] == res.energy
+    assert rp._retried(lambda x: (float(x @ x), 2 * x), x0, kw, {"iterations": 50}) is None
 
 
 def test_no_wire_of_at_most_a_thousand_segments_is_polished(monkeypatch):

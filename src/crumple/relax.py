@@ -236,8 +236,10 @@ def minimize_wire(
         a reference stays valid). A saddle escape is reported under the number of the
         iteration before it. Above ``ACCURATE_STEPS_ABOVE`` segments, a stage ended at its
         force resolution goes on in a polish (``crumple.relax_polish``: steps in the
-        displacement from the end, then possibly a second pass in the positions) that is not
-        reported; its iterations are in the result's count, and its end is the result's ``x``.
+        displacement from the end, then possibly a pass in the positions again), reported too,
+        its iterations counted on from the first pass's; its positions are the end's plus the
+        displacement, rounded. The stage's result is the last pass that converged, else the
+        first pass: its ``x`` is the last point reported only where that pass was the last.
     Examples
     --------
     >>> from crumple.protocol import initial_state
@@ -283,7 +285,9 @@ def minimize_wire(
     # a stage that stopped at the force resolution of its positions: Newton again in the
     # displacement from its end, the elastic forces from the segments' sums (relax_polish)
     large = wire.n_segments > ACCURATE_STEPS_ABOVE
-    return _polished(energy, res, kw, ftol) if large and _needs_polish(res, ftol) else res
+    if large and _needs_polish(res, ftol):
+        return _polished(energy, res, kw, ftol, report)
+    return res
 
 
 def _read_only(callback):

@@ -61,11 +61,15 @@ def _needs_polish(first: MinimizeResult, ftol: float) -> bool:
     return POLISH and ftol < first.max_force <= first.force_resolution
 
 
-def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeResult:
+def _polished(
+    energy, first: MinimizeResult, kw: dict, ftol: float, callback=None
+) -> MinimizeResult:
     """Newton in the displacement from ``first.x`` (``kw``: the first pass's keywords); the
     polished result if it converged below the first's largest force; else, where due
     (:func:`_retry_due`), the retry's from the polish's end point if that converged; else
-    ``first``. The counts of every pass are added, and the message says what each did."""
+    ``first``. The counts of every pass are added, and the message says what each did.
+    ``callback(iteration, positions, energy, max_force)``: each pass's accepted steps, their
+    iterations counted on from the passes before, the polish's positions ``first.x + u``."""
     ref = np.array(first.x, dtype=np.float64)
     left = int(kw.get("maxiter", 500)) - first.iterations  # the stage's budget holds for all
     if left < 1:
@@ -81,7 +85,8 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     for name in _AT_POINT:
         kw[name] = at(kw.get(name))
     kw["hess_fallback"] = kw["hess"] if same else at(kw.get("hess_fallback"))
-    res = newton(energy.displaced(ref), np.zeros_like(ref), **kw)
+    seen = _counted_on(callback, first.iterations, ref)
+    res = newton(energy.displaced(ref), np.zeros_like(ref), **kw, callback=seen)
     cost = _cost(first, res)
     if res.converged and res.max_force < first.max_force:
         message = (f"{res.message}; polished in the displacement ({res.iterations} iterations) "
@@ -90,7 +95,7 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
     polish = f"({res.iterations} iterations in the displacement: {res.message})"
     note = ""
     if _retry_due(first, res):
-        third = _retried(energy, ref + res.x, plain, cost)
+        third = _retried(energy, ref + res.x, plain, cost, callback)
         if third is not None:
             cost = _cost(first, res, third)
             if third.converged:
@@ -101,6 +106,16 @@ def _polished(energy, first: MinimizeResult, kw: dict, ftol: float) -> MinimizeR
             note = f"; retried in the coordinates ({third.iterations} iterations: {third.message})"
     message = f"{first.message}; not polished {polish}{note}"
     return dataclasses.replace(first, message=message, **cost)
+
+
+def _counted_on(callback, before: int, ref=None):
+    """``callback`` for a pass after ``before`` iterations: its iterations counted on, and
+    (``ref`` given: a pass in the displacement) its points as positions ``ref + u``."""
+    if callback is None:
+        return None
+    if ref is None:
+        return lambda it, x, e, fmax: callback(before + it, x, e, fmax)
+    return lambda it, u, e, fmax: callback(before + it, ref + u, e, fmax)
 
 
 def _cost(*passes: MinimizeResult) -> dict:
@@ -117,11 +132,13 @@ def _retry_due(first: MinimizeResult, res: MinimizeResult) -> bool:
             and res.max_force < first.max_force)  # fmt: skip
 
 
-def _retried(energy, x, kw: dict, cost: dict) -> MinimizeResult | None:
+def _retried(energy, x, kw: dict, cost: dict, callback=None) -> MinimizeResult | None:
     """Newton in the coordinates from ``x`` (the end point of a polish) with the first pass's
     keywords ``kw`` and criteria, stopped by the polish's patience (``POLISH_PATIENCE``) and
-    within what is left of the stage's budget after ``cost``; None when nothing is left."""
+    within what is left of the stage's budget after ``cost``; None when nothing is left.
+    ``callback``: its accepted steps, counted on from ``cost["iterations"]``."""
     left = int(kw.get("maxiter", 500)) - cost["iterations"]
     if left < 1:
         return None
-    return newton(energy, x, **dict(kw, maxiter=left, patience=POLISH_PATIENCE))
+    seen = _counted_on(callback, cost["iterations"])
+    return newton(energy, x, **dict(kw, maxiter=left, patience=POLISH_PATIENCE), callback=seen)

@@ -10,6 +10,7 @@ that a log of a long run stays short and each of its lines says where the job is
 from __future__ import annotations
 
 import math
+import shutil
 import sys
 import threading
 import time
@@ -222,11 +223,12 @@ def time_left(costs: dict, ran: dict, left: dict, elapsed: float, recent: list) 
 
 
 class Progress:
-    """Stages and replicas done, on stderr: one rewritten line on a terminal, else a line at
-    most every ``every`` seconds, and one line per finished replica. The time left weighs each
-    remaining stage by what that stage cost in earlier replicas (:func:`time_left`). A stage
-    that runs long also reports its Newton iterations (:meth:`iteration`), in a log at most
-    every ``every_iteration`` seconds."""
+    """Stages and replicas done, on stderr: one rewritten line on a terminal (cut to its
+    width), else a line at most every ``every`` seconds, and one line per finished replica.
+    The time left weighs each remaining stage by what that stage cost in earlier replicas
+    (:func:`time_left`). A stage that runs long also reports its Newton iterations
+    (:meth:`iteration`), in a log at most every ``every_iteration`` seconds; ``ftol`` and
+    ``maxiter``, the ramp's, are shown beside them."""
 
     def __init__(
         self,
@@ -235,13 +237,18 @@ class Progress:
         n_stages: int,
         every: float = 5.0,
         every_iteration: float = 30.0,
+        *,
+        ftol: float | None = None,
+        maxiter: int | None = None,
     ):
         self.quiet, self.every, self.every_iteration = quiet, every, every_iteration
-        self.width = 0  # the longest line rewritten on a terminal
+        self.ftol, self.maxiter = ftol, maxiter
         self.n_rep, self.n_stages = n_replicas, n_stages
         self.tty = sys.stderr.isatty()
+        self.clock = time.monotonic  # the logs' throttle (a test scripts it)
         self.t0 = time.perf_counter()
-        self.last = -math.inf
+        self.last = -math.inf  # the last stage line in a log
+        self.last_iteration = -math.inf  # the last iteration line in a log
         self.stages_done: dict[int, int] = {}
         self.not_converged = 0
         self.replicas_done = 0
@@ -250,16 +257,22 @@ class Progress:
         self.costs: dict[int, list[float]] = {}  # stage index -> the durations measured
         self.recent: list[float] = []  # the durations, in the order measured
 
-    def _write(self, line: str, force: bool = False, every: float | None = None) -> None:
+    def _write(self, line: str, force: bool = False, kind: str = "last") -> None:
+        """``line``: on a terminal over the last one, cut to the terminal's width; in a log
+        when ``force`` or when the last line of its ``kind`` ("last": stages,
+        "last_iteration": iterations) is older than its interval."""
         if self.quiet:
             return
         try:
             if self.tty:
-                self.width = max(self.width, len(line))
-                sys.stderr.write(f"\r{line.ljust(self.width)}   ")
-            elif force or time.monotonic() - self.last >= (self.every if every is None else every):
-                self.last = time.monotonic()
-                sys.stderr.write(line + "\n")
+                width = shutil.get_terminal_size().columns - 1
+                sys.stderr.write("\r\x1b[K" + line[:width])  # erase to the line's end
+            else:
+                now = self.clock()
+                every = self.every if kind == "last" else self.every_iteration
+                if force or now - getattr(self, kind) >= every:
+                    setattr(self, kind, now)
+                    sys.stderr.write(line + "\n")
             sys.stderr.flush()
         except OSError:  # stderr closed (e.g. `2>&1 | head`): go quiet, keep computing
             self.quiet = True
@@ -292,17 +305,18 @@ class Progress:
         )
 
     def iteration(
-        self, r: int, i: int, lam: float, it: int, energy: float, max_force: float
+        self, r: int, i: int, lam: float, it: int, energy: float, max_force: float, seconds
     ) -> None:
-        """Replica r's stage i is still running: its last Newton iteration."""
-        elapsed = time.perf_counter() - self.t0
-        start = self.finished.get(r, 0.0 if self.replicas_done == 0 and i == 0 else None)
-        since = "" if start is None else f", {duration(elapsed - start)} in this stage"
+        """Replica r's stage i has run ``seconds``: its Newton iteration ``it`` reached
+        ``energy`` and ``max_force``."""
+        cap = "" if self.maxiter is None else f" (max {self.maxiter})"
+        goal = "" if self.ftol is None else f" (ftol {self.ftol:.3g})"
+        bad = f", {self.not_converged} NOT converged" if self.not_converged else ""
         self._write(
-            f"  replica {r}, stage {i + 1}/{self.n_stages} (λ = {lam:.4g}): Newton iteration "
-            f"{it}, energy {energy:.10g}, max force {max_force:.3g}{since}, {elapsed:.0f} s "
-            "elapsed",
-            every=self.every_iteration,
+            f"  replica {r}, stage {i + 1}/{self.n_stages} (λ = {lam:.4g}), {duration(seconds)} "
+            f"in: iteration {it}{cap}, energy {energy:.10g}, max force {max_force:.3g}{goal} "
+            f"[energy/length]{bad}; {duration(time.perf_counter() - self.t0)} elapsed",
+            kind="last_iteration",
         )
 
     def replica(self, r: int, result) -> None:
@@ -311,11 +325,9 @@ class Progress:
         bad = len(result.failed_stages)
         note = "all stages converged" if not bad else f"{bad} stage(s) NOT converged"
         elapsed = time.perf_counter() - self.t0
-        if self.tty and not self.quiet:
-            sys.stderr.write("\r")
         self._write(
             f"  replica {r} done ({self.replicas_done}/{self.n_rep}): {len(result.stages)} "
-            f"stages, {note}  [{elapsed:.1f} s elapsed]" + (" " * 10 if self.tty else ""),
+            f"stages, {note}  [{elapsed:.1f} s elapsed]",
             force=True,
         )
         if self.tty and not self.quiet:

@@ -239,12 +239,13 @@ def _init_worker(queue) -> None:
 #: Seconds a stage runs before it reports its Newton iterations, and then between reports: a
 #: stage at N = 100 takes milliseconds and reports none; one at N = 10⁵ runs for hours.
 ITERATION_EVERY = 2.0
+_clock = time.monotonic  # the replicas' clock (a test scripts it)
 
 
 def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, iterations=True):
-    """Replica ``r``: its stages (and, while a stage runs for more than
-    :data:`ITERATION_EVERY` seconds, its Newton iterations) go to ``on_stage`` and
-    ``on_iteration`` in this process, or tagged through the workers' queue."""
+    """Replica ``r``: its stages, and, once a stage has run :data:`ITERATION_EVERY` seconds,
+    its Newton iterations at most that often (with the seconds the stage has run), go to
+    ``on_stage`` and ``on_iteration`` in this process, or tagged through the workers' queue."""
     from ..protocol import run_ramp
 
     def send(msg, local):
@@ -253,22 +254,33 @@ def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, ite
         elif _QUEUE is not None:
             _QUEUE.put(msg)
 
-    last = [time.monotonic()]  # the last stage's end or the last iteration reported
+    began = [_clock()] * 2  # the stage's start, and the last report in it (or its start)
 
     def progress(i, n, stage):
-        last[0] = time.monotonic()
+        began[:] = [_clock()] * 2
         send(("stage", r, i, stage.lam, stage.result.converged), on_stage)
 
     def iteration(i, lam, it, energy, max_force):
-        now = time.monotonic()
-        if now - last[0] >= ITERATION_EVERY:
-            last[0] = now
-            send(("iteration", r, i, lam, it, energy, max_force), on_iteration)
+        now = _clock()
+        if now - began[1] >= ITERATION_EVERY:
+            began[1] = now
+            send(("iteration", r, i, lam, it, energy, max_force, now - began[0]), on_iteration)
 
     within = iteration if iterations and ramp.method == "newton" else None
     # as crumple.protocol.run_replicas: replica r uses SeedSequence(seed).spawn(n)[r]
     rng = np.random.default_rng(seed_seq)
     return run_ramp(wire, ramp, seed=rng, progress=progress, iteration=within)
+
+
+def _dispatch(prog: Progress, msg: tuple) -> None:
+    """A worker's message, ``("stage", ...)`` or ``("iteration", ...)``, to ``prog``."""
+    kind, *args = msg
+    if kind == "stage":
+        prog.stage(*args)
+    elif kind == "iteration":
+        prog.iteration(*args)
+    else:
+        raise ValueError(f"unknown progress message {msg!r}")
 
 
 def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, done: dict) -> None:
@@ -297,8 +309,7 @@ def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, don
         while pending:
             try:
                 while True:
-                    kind, *msg = q.get(timeout=0.2)
-                    (prog.stage if kind == "stage" else prog.iteration)(*msg)
+                    _dispatch(prog, q.get(timeout=0.2))
             except queue_mod.Empty:
                 pass
             for r in [r for r, a in pending.items() if a.ready()]:
@@ -414,7 +425,7 @@ def cmd_run(args) -> int:
             "ensemble give the wire imperfections, e.g. --rest-angle-sd 0.01"
         )
     out.mkdir(parents=True, exist_ok=True)
-    prog = Progress(args.quiet, n_rep, len(ramp.lambdas))
+    prog = Progress(args.quiet, n_rep, len(ramp.lambdas), ftol=ramp.ftol, maxiter=ramp.maxiter)
     done: dict = {}
     main_thread = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGTERM, _on_sigterm) if main_thread else None
