@@ -73,6 +73,27 @@ def test_sigterm_leaves_no_worker_running(tmp_path):
     assert "Traceback" not in err
 
 
+def test_sigterm_while_workers_report_their_newton_iterations(tmp_path):
+    """Newton stages long enough to report their iterations through the workers' queue: a
+    SIGTERM then still stops every process, with the same message and nothing written."""
+    long_newton = ["--n-segments", "3000", "--hard-core", "3e-5", "--lambdas", "1000,2000"]
+    proc = start(tmp_path, "--replicas", "2", "--workers", "2", *long_newton)
+    seen, deadline = "", time.monotonic() + 120
+    while time.monotonic() < deadline and "iteration" not in seen:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        seen += line
+    assert "iteration" in seen, seen
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=20)
+    assert proc.returncode == 143, seen + err
+    assert wait_group_empty(proc.pid) == []
+    assert "terminated" in err and "nothing was written" in err
+    assert "Traceback" not in err
+    assert not (tmp_path / "o" / "ramps.h5").exists()
+
+
 def test_sigint_stops_within_seconds_and_says_what_was_kept(tmp_path):
     proc = start(tmp_path, "--replicas", "4", "--workers", "2", *SLOW)
     t0 = time.monotonic()
