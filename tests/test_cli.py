@@ -2,6 +2,8 @@
 
 import json
 import math
+import os
+import sys
 from pathlib import Path
 
 import h5py
@@ -533,7 +535,7 @@ def test_a_second_replica_is_timed_by_the_first_ones_stages(monkeypatch, capsys)
     prog.replica(0, SimpleNamespace(failed_stages=[], stages=[None] * 5))
     for i in range(2):
         prog.stage(1, i, 1.0, True)
-    assert "~72 s left" in _last_line(capsys)
+    assert "~1 min 12 s left" in _last_line(capsys)
 
 
 def test_the_time_left_weighs_the_stages_by_their_measured_costs():
@@ -613,9 +615,22 @@ def test_the_iteration_line_names_the_stage_the_step_and_the_target(monkeypatch,
     prog.stage(0, 0, 1.0, False)
     prog.iteration(0, 1, 300.0, 17, 2.5, 0.125, 135.0)
     assert _last_line(capsys).strip() == (
-        "replica 0, stage 2/2 (λ = 300), 2 min 15 s in: iteration 17 (max 5000), energy 2.5, "
-        "max force 0.125 (ftol 1e-06) [energy/length], 1 NOT converged; 3 min 20 s elapsed"
+        "λ = 300: energy 2.5, max force 0.125 (ftol 1e-06), iteration 17/5000, 2 min 15 s "
+        "into stage 2/2 of replica 0, 1 NOT converged"
     )
+
+
+def test_crumple_run_shows_the_ramps_target_beside_a_long_stages_iterations(
+    monkeypatch, capsys, tmp_path
+):
+    import crumple.cli.run as clirun
+
+    monkeypatch.setattr(clirun, "ITERATION_EVERY", 0.0)  # every stage counts as long
+    flags = ["--n-segments", 20, "--lambdas", "1,300", "--maxiter", 700, "--figure-lambdas", 300]
+    code, _, err = run_cli(capsys, "run", "--out", tmp_path / "o", *flags)
+    assert code == 0, err
+    line = next(row for row in err.splitlines() if "iteration" in row)
+    assert line.startswith("  λ = 1: energy ") and "(ftol 1e-06), iteration 1/700, " in line
 
 
 def test_a_log_shows_stages_and_iterations_each_at_its_own_interval(monkeypatch, capsys):
@@ -636,21 +651,38 @@ def test_a_log_shows_stages_and_iterations_each_at_its_own_interval(monkeypatch,
     assert shown == [True, True, False, False, True, True, False]
 
 
-def test_a_terminal_line_is_erased_and_cut_to_the_width(monkeypatch, capsys):
-    import os
-
+def test_a_terminal_line_is_erased_and_cut_to_stderrs_width(monkeypatch, capsys):
+    import crumple.cli.progress as cp
     from crumple.cli.run import Progress
 
     prog = Progress(quiet=False, n_replicas=1, n_stages=3)
     prog.tty = True
-    monkeypatch.setattr("shutil.get_terminal_size", lambda *a: os.terminal_size((40, 20)))
+    monkeypatch.setattr(cp, "_columns", lambda stream: 40)
     prog.iteration(0, 1, 10.0, 7, 1.0, 0.5, 1.0)
     prog.stage(0, 1, 10.0, True)
-    out = capsys.readouterr().err
-    parts = out.split("\r\x1b[K")
+    parts = capsys.readouterr().err.split("\r\x1b[K")
     assert parts[0] == "" and len(parts) == 3
     assert all(0 < len(p) <= 39 for p in parts[1:])
-    assert parts[1].startswith("  replica 0, stage 2/3") and parts[2].startswith("  stage 2/3")
+    assert parts[1].startswith("  λ = 10: energy 1") and parts[2].startswith("  stage 2/3")
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="a pseudo-terminal")
+def test_the_width_is_that_of_stderrs_terminal():
+    import fcntl
+    import pty
+    import struct
+    import termios
+
+    from crumple.cli.progress import _columns
+
+    main, side = pty.openpty()
+    try:
+        fcntl.ioctl(side, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 173, 0, 0))
+        with open(side, "w", closefd=False) as tty:
+            assert _columns(tty) == 173
+    finally:
+        os.close(main)
+        os.close(side)
 
 
 @pytest.mark.parametrize("dpi", [0, -3])

@@ -1920,9 +1920,14 @@ def test_newton_stops_where_it_no_longer_makes_progress():
     def stiff(x):
         return 1e6 * np.eye(2)
 
-    r = newton(flat, np.ones(2), hess=stiff, maxiter=200, patience=5)
+    seen = []
+    r = newton(flat, np.ones(2), hess=stiff, maxiter=200, patience=5,
+               callback=lambda it, x, e, f: seen.append((it, x.copy())))  # fmt: skip
     assert not r.converged and r.iterations == 5
     assert r.message == "stopped: no decrease beyond the energy's resolution in 5 iterations"
+    # every accepted step is reported, the last one (the result) too
+    assert [s[0] for s in seen] == [1, 2, 3, 4, 5]
+    np.testing.assert_array_equal(seen[-1][1], r.x)
     assert newton(flat, np.ones(2), hess=stiff, maxiter=200).iterations == 200
     r = newton(bowl, np.ones(2), hess=lambda x: 1e3 * np.eye(2), maxiter=30, patience=5)
     assert r.iterations == 30 and r.message == "maximum number of iterations reached"

@@ -693,7 +693,13 @@ def test_a_stage_at_the_force_resolution_is_polished_in_the_displacement(monkeyp
     assert "converged to the force resolution" in first.message
     assert first.max_force > 1e-7 and first.force_resolution > 1e-9
     assert polished.iterations - first.iterations in (1, 2, 3)
-    # the callback saw both passes, the polish's iterations counted on, its end the result
+    # the callback saw both passes, the polish's iterations counted on, its end the result;
+    # without the callback the stage is the same, bit for bit
+    monkeypatch.setattr(rp, "POLISH", True)
+    silent = relax.minimize_wire(wire, x, 10.0, ftol=1e-9)
+    np.testing.assert_array_equal(silent.x, polished.x)
+    assert (silent.iterations, silent.energy) == (polished.iterations, polished.energy)
+    monkeypatch.setattr(rp, "POLISH", False)
     assert [s[0] for s in seen] == list(range(1, polished.iterations + 1))
     assert seen[first.iterations - 1][2] == first.energy
     np.testing.assert_array_equal(seen[-1][1], polished.x)
@@ -823,7 +829,10 @@ def test_a_polish_that_lowers_an_unconverged_stage_is_retried_in_the_coordinates
     kw = {"maxiter": budget, "hess": hess, "hess_fallback": hess, "retract": object()}
     monkeypatch.setattr(rp, "newton", scripted)
     monkeypatch.setattr(rp, "RETRY", case != "off")
-    out = rp._polished(energy, first, kw, 1e-6)
+    seen = []
+    out = rp._polished(energy, first, kw, 1e-6, lambda *a: seen.append(a))
+    calls[0][2]["callback"](1, u, 1.4, 0.1)  # the polish's first step, in the displacement
+    assert seen[-1][0] == 31 and np.array_equal(seen[-1][1], x1 + u)
     if case in ("converged first", "higher", "more force", "off", "no budget"):
         assert len(calls) == 1 and out.x is x1 and "retried" not in out.message
         assert out.iterations == 130 and out.curved_steps == 3 + 10
@@ -836,6 +845,8 @@ def test_a_polish_that_lowers_an_unconverged_stage_is_retried_in_the_coordinates
     assert again["hess"] is hess and again["retract"] is kw["retract"]  # the first pass's own
     assert again["maxiter"] == (5 if case == "short budget" else 5000 - 130)
     assert again["patience"] == rp.POLISH_PATIENCE
+    again["callback"](1, x1 + u, 1.3, 0.05)  # the retry's first step: after 30 + 100
+    assert seen[-1][0] == 131 and np.array_equal(seen[-1][1], x1 + u)
     assert out.iterations == 131 and out.factorizations == 262 and out.evaluations == 134
     assert out.krylov_iterations == 3 * 131 and out.curved_steps == 3 + 10 + 0
     if case == "does not":

@@ -292,12 +292,12 @@ def newton(
             message = failure + (f" (the point returned {st.refine_note})" if st.refine else "")
             break
         st.refine = False
+        if callback is not None:  # an accepted step, the last one of a pass out of patience too
+            callback(st.it, st.x, st.e, st.fmax)
         if _out_of_patience(st, patience):
             message = (f"stopped: no decrease beyond the energy's resolution in {patience} "
                        "iterations")  # fmt: skip
             break
-        if callback is not None:
-            callback(st.it, st.x, st.e, st.fmax)
     return _result(st, ldl, ftol, message)
 
 

@@ -236,10 +236,13 @@ def minimize_wire(
         a reference stays valid). A saddle escape is reported under the number of the
         iteration before it. Above ``ACCURATE_STEPS_ABOVE`` segments, a stage ended at its
         force resolution goes on in a polish (``crumple.relax_polish``: steps in the
-        displacement from the end, then possibly a pass in the positions again), reported too,
-        its iterations counted on from the first pass's; its positions are the end's plus the
-        displacement, rounded. The stage's result is the last pass that converged, else the
-        first pass: its ``x`` is the last point reported only where that pass was the last.
+        displacement from the end, then possibly a retry in the positions), reported too, its
+        iterations counted on from the passes before; the polish's positions are the end's
+        plus the displacement, rounded, and its ``max_force`` that of the unrounded sum
+        (recomputed at the rounded positions it is at the first pass's resolution). The
+        stage's result is the polish's end where it converged below the first pass's largest
+        force, else the retry's where that converged, else the first pass's end: the last
+        point reported is the result only where its pass is.
     Examples
     --------
     >>> from crumple.protocol import initial_state

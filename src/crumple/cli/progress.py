@@ -10,6 +10,7 @@ that a log of a long run stays short and each of its lines says where the job is
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import sys
 import threading
@@ -222,6 +223,15 @@ def time_left(costs: dict, ran: dict, left: dict, elapsed: float, recent: list) 
     return elapsed * todo / done if done > 0 else math.nan
 
 
+def _columns(stream) -> int:
+    """The width of the terminal ``stream`` writes to (stderr's own, not stdout's: a run's
+    summary on stdout may go to a file); 80 where it has none."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns
+    except (AttributeError, OSError, ValueError):
+        return shutil.get_terminal_size().columns
+
+
 class Progress:
     """Stages and replicas done, on stderr: one rewritten line on a terminal (cut to its
     width), else a line at most every ``every`` seconds, and one line per finished replica.
@@ -264,9 +274,8 @@ class Progress:
         if self.quiet:
             return
         try:
-            if self.tty:
-                width = shutil.get_terminal_size().columns - 1
-                sys.stderr.write("\r\x1b[K" + line[:width])  # erase to the line's end
+            if self.tty:  # erase to the line's end, and never wrap (a wrapped line stays)
+                sys.stderr.write("\r\x1b[K" + line[: _columns(sys.stderr) - 1])
             else:
                 now = self.clock()
                 every = self.every if kind == "last" else self.every_iteration
@@ -300,8 +309,8 @@ class Progress:
         bad = f", {self.not_converged} NOT converged" if self.not_converged else ""
         self._write(
             f"  stage {done}/{total} (replica {r}: λ = {lam:.4g}){bad}, "
-            f"{self.replicas_done}/{self.n_rep} replica(s) done, {elapsed:.0f} s elapsed, "
-            f"~{eta:.0f} s left"
+            f"{self.replicas_done}/{self.n_rep} replica(s) done, {duration(elapsed)} elapsed, "
+            f"~{duration(eta)} left"
         )
 
     def iteration(
@@ -309,13 +318,14 @@ class Progress:
     ) -> None:
         """Replica r's stage i has run ``seconds``: its Newton iteration ``it`` reached
         ``energy`` and ``max_force``."""
-        cap = "" if self.maxiter is None else f" (max {self.maxiter})"
+        cap = "" if self.maxiter is None else f"/{self.maxiter}"
         goal = "" if self.ftol is None else f" (ftol {self.ftol:.3g})"
         bad = f", {self.not_converged} NOT converged" if self.not_converged else ""
+        # what moves first: a terminal's line is cut to its width
         self._write(
-            f"  replica {r}, stage {i + 1}/{self.n_stages} (λ = {lam:.4g}), {duration(seconds)} "
-            f"in: iteration {it}{cap}, energy {energy:.10g}, max force {max_force:.3g}{goal} "
-            f"[energy/length]{bad}; {duration(time.perf_counter() - self.t0)} elapsed",
+            f"  λ = {lam:.4g}: energy {energy:.10g}, max force {max_force:.3g}{goal}, "
+            f"iteration {it}{cap}, {duration(seconds)} into stage {i + 1}/{self.n_stages} of "
+            f"replica {r}{bad}",
             kind="last_iteration",
         )
 
@@ -327,7 +337,7 @@ class Progress:
         elapsed = time.perf_counter() - self.t0
         self._write(
             f"  replica {r} done ({self.replicas_done}/{self.n_rep}): {len(result.stages)} "
-            f"stages, {note}  [{elapsed:.1f} s elapsed]",
+            f"stages, {note}  [{duration(elapsed)} elapsed]",
             force=True,
         )
         if self.tty and not self.quiet:
