@@ -243,6 +243,7 @@ def minimize_wire(
         stage's result is the polish's end where it converged below the first pass's largest
         force, else the retry's where that converged, else the first pass's end: the last
         point reported is the result only where its pass is.
+
     Examples
     --------
     >>> from crumple.protocol import initial_state
