@@ -225,7 +225,7 @@ def time_left(costs: dict, ran: dict, left: dict, elapsed: float, recent: list) 
 
 def _columns(stream) -> int:
     """The width of the terminal ``stream`` writes to (stderr's own, not stdout's: a run's
-    summary on stdout may go to a file); 80 where it has none."""
+    summary on stdout may go to a file); else :func:`shutil.get_terminal_size`'s guess."""
     try:
         return os.get_terminal_size(stream.fileno()).columns
     except (AttributeError, OSError, ValueError):
@@ -257,8 +257,7 @@ class Progress:
         self.tty = sys.stderr.isatty()
         self.clock = time.monotonic  # the logs' throttle (a test scripts it)
         self.t0 = time.perf_counter()
-        self.last = -math.inf  # the last stage line in a log
-        self.last_iteration = -math.inf  # the last iteration line in a log
+        self.last = {"stage": -math.inf, "iteration": -math.inf}  # each kind's last line in a log
         self.stages_done: dict[int, int] = {}
         self.not_converged = 0
         self.replicas_done = 0
@@ -267,10 +266,10 @@ class Progress:
         self.costs: dict[int, list[float]] = {}  # stage index -> the durations measured
         self.recent: list[float] = []  # the durations, in the order measured
 
-    def _write(self, line: str, force: bool = False, kind: str = "last") -> None:
+    def _write(self, line: str, force: bool = False, kind: str = "stage") -> None:
         """``line``: on a terminal over the last one, cut to the terminal's width; in a log
-        when ``force`` or when the last line of its ``kind`` ("last": stages,
-        "last_iteration": iterations) is older than its interval."""
+        when ``force`` or when the last line of its ``kind`` ("stage" or "iteration") is older
+        than that kind's interval."""
         if self.quiet:
             return
         try:
@@ -278,9 +277,9 @@ class Progress:
                 sys.stderr.write("\r\x1b[K" + line[: _columns(sys.stderr) - 1])
             else:
                 now = self.clock()
-                every = self.every if kind == "last" else self.every_iteration
-                if force or now - getattr(self, kind) >= every:
-                    setattr(self, kind, now)
+                every = self.every if kind == "stage" else self.every_iteration
+                if force or now - self.last[kind] >= every:
+                    self.last[kind] = now
                     sys.stderr.write(line + "\n")
             sys.stderr.flush()
         except OSError:  # stderr closed (e.g. `2>&1 | head`): go quiet, keep computing
@@ -326,7 +325,7 @@ class Progress:
             f"  λ = {lam:.4g}: energy {energy:.10g}, max force {max_force:.3g}{goal}, "
             f"iteration {it}{cap}, {duration(seconds)} into stage {i + 1}/{self.n_stages} of "
             f"replica {r}{bad}",
-            kind="last_iteration",
+            kind="iteration",
         )
 
     def replica(self, r: int, result) -> None:
