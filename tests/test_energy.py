@@ -686,6 +686,57 @@ def test_projected_contact_hessian_only_adds_positive_curvature():
     np.testing.assert_array_equal(energy.hessian(free, project_contacts=True), energy.hessian(free))
 
 
+def test_caps_projection_projects_only_the_pairs_at_a_segments_end():
+    """``project_contacts="caps"`` (the Newton fallback "caps") projects the blocks of the
+    pairs whose closest point is a segment's end, where D is a point-point distance, and keeps
+    the others exact: on a hairpin whose pairs all face a segment's middle it is the exact
+    Hessian (and the full projection is not), on a wire whose pairs all sit off a segment's
+    end it is the full projection (and the exact Hessian is not), dense and sparse alike."""
+    m = 7
+    seg = 1.0 / (2 * m)
+    d = 0.3 * seg
+    cases = {
+        "middle": (staggered_hairpin(m, seg, 0.4 * d), 2 * m),
+        "end": (end_contact(m, seg, 0.5 * d), 2 * m + 3),
+    }
+    for name, (pos, n) in cases.items():
+        wire = Wire(k_b=1, k_s=1e3, n_segments=n, length=n * seg, hard_core=d,
+                    hard_core_energy=1.0)  # fmt: skip
+        ts = [t for _, t in contact_geometry(pos, d)]
+        assert ts and all((0 < t < 1) == (name == "middle") for t in ts), ts
+        energy = WireEnergy(wire, 10.0)
+        h = {p: energy.hessian(pos, dense=True, project_contacts=p) for p in (False, True, "caps")}
+        same, other = (False, True) if name == "middle" else (True, False)
+        np.testing.assert_array_equal(h["caps"], h[same])
+        assert not np.allclose(h["caps"], h[other]), name
+        sparse = energy.hessian_csc(pos, project_contacts="caps").tocsc().toarray()
+        np.testing.assert_array_equal(sparse, h["caps"])
+    with pytest.raises(ValueError, match="project_contacts"):
+        energy.hessian(pos, project_contacts="ends")
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_caps_projection_lies_between_the_exact_and_the_projected_hessian(seed):
+    """Projecting some blocks removes only negative curvature: H ≤ H_caps ≤ H_projected in
+    the order of symmetric matrices, strictly on both sides, on a hairpin whose upper strand's
+    nodes sit a tenth of a segment off the lower one's: each faces one segment near its end
+    (a pair in a middle) and the joint beside it (a pair at an end)."""
+    m = 7
+    seg = 1.0 / (2 * m)
+    wire = Wire(k_b=1, k_s=1e3, n_segments=2 * m, hard_core=0.3 * seg, hard_core_energy=1.0)
+    pos = staggered_hairpin(m, seg, 0.4 * wire.hard_core)
+    pos[m + 1 :, 0] += 0.4 * seg
+    pos += np.random.default_rng(seed).normal(0, 1e-3 * wire.hard_core, pos.shape)
+    ts = [t for _, t in contact_geometry(pos, wire.hard_core)]
+    assert any(0 < t < 1 for t in ts) and any(not 0 < t < 1 for t in ts), ts
+    energy = WireEnergy(wire, 10.0)
+    h = {p: energy.hessian(pos, dense=True, project_contacts=p) for p in (False, True, "caps")}
+    scale = np.abs(h[False]).max()
+    for low, high in ((False, "caps"), ("caps", True)):
+        gap = np.linalg.eigvalsh(h[high] - h[low])
+        assert gap.min() > -1e-9 * scale and gap.max() > 1e-6 * scale, (low, high)
+
+
 def test_hessian_dense_or_sparse_by_size():
     small = Wire(k_b=1, k_s=1e4, n_segments=20)
     big = Wire(k_b=1, k_s=1e4, n_segments=1000)

@@ -236,7 +236,7 @@ class WireEnergy:
         )  # fmt: skip
         return _line_prepare, _line_energy, _line_admissible, params
 
-    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False,
+    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool | str = False,
                 project_bending: bool = False):  # fmt: skip
         """Hessian over ``x.ravel()``: dense (2n, 2n) or sparse CSC holding both triangles.
 
@@ -249,7 +249,12 @@ class WireEnergy:
         by its positive part: the Newton minimiser's fallback where the exact Hessian is
         indefinite. The stretching blocks stay exact: their negative transverse stiffness
         under compression is what makes a straight wire buckle, and the fallback must keep it.
+        ``project_contacts="caps"`` projects only the pairs whose closest point is a segment's
+        end: there D is a point-point distance, whose transverse curvature 1/D (the polyline's
+        corner, at the scale d) gives the block a negative eigenvalue of about -2F/D, F the
+        pair's force; pairs on a segment's interior keep their exact block (docs/model.md).
         """
+        project_contacts = _projection(project_contacts)
         x = np.ascontiguousarray(x, dtype=np.float64)
         ndof = x.size
         if dense is None:
@@ -261,10 +266,12 @@ class WireEnergy:
         return self.hessian_csc(x, project_contacts=project_contacts,
                                 project_bending=project_bending).tocsc()  # fmt: skip
 
-    def hessian_csc(self, x, *, project_contacts: bool = False, project_bending: bool = False):
+    def hessian_csc(self, x, *, project_contacts: bool | str = False,
+                    project_bending: bool = False):  # fmt: skip
         """The sparse Hessian of :meth:`hessian` as a :class:`crumple.linalg.CSC`: the same
         arrays, without building a SciPy matrix (the Newton minimiser's hot path; ``x`` is
         trusted to be a float array of shape (n_nodes, 2))."""
+        project_contacts = _projection(project_contacts)
         x = np.ascontiguousarray(x, dtype=np.float64)
         ks, js = self._pairs(x)
         if self._pattern is not None and self._pattern[0] is ks:  # straight into the pattern
@@ -376,6 +383,21 @@ class WireEnergy:
 #: the same iterations as listing every pair the step could reach at all, 10 % less CPU at
 #: N = 1000 (fewer springs tried and dropped).
 BARRIER_MARGIN = 0.5
+
+
+#: The kernels' codes of ``project_contacts`` (:meth:`WireEnergy.hessian`); a code maps to
+#: itself (0 and 1 are False and True).
+_PROJECTIONS = {False: 0, True: 1, "caps": 2, 2: 2}
+
+
+def _projection(project_contacts) -> int:
+    """``project_contacts`` as the kernels' code: 0 exact, 1 every contact, 2 the caps."""
+    try:
+        return _PROJECTIONS[project_contacts]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"project_contacts must be False, True or 'caps', got {project_contacts!r}"
+        ) from None
 
 
 def _csc_pattern(rows, cols, ndof):

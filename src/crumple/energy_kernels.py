@@ -416,6 +416,8 @@ def _wall_triplets(pos, radius, width, strength, rows, cols, vals, m):
 @njit(cache=True)
 def _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m):
     """The hard core, one 6 × 6 block per candidate pair from index m (zeros outside the core).
+    ``project``: 0 (or False) exact; 1 (or True) every block projected on its positive part;
+    2 only the blocks of pairs whose closest point is a segment's end (a joint's cap).
     Returns the next index."""
     nodes3 = np.empty(3, dtype=np.int64)
     block6 = np.empty((6, 6))
@@ -480,10 +482,11 @@ def _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m
                     block6[off + u, off + v] += val
                     block6[u, off + v] -= val
                     block6[off + u, v] -= val
-        if project:
+        if project == 1 or (project == 2 and not 0.0 < t < 1.0):
             # keep the positive part only: the negative curvature of a contact is a geometric
             # effect of its force, and left in it forces a large global shift that stalls
-            # Newton on the wire's soft modes (docs/model.md)
+            # Newton on the wire's soft modes (docs/model.md); 2: only where the closest point
+            # is a segment's end, whose curvature -F/D is that of the polyline's corner
             _project_psd(block6)
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     return m
