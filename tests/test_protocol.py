@@ -295,6 +295,20 @@ def test_exact_fallback_keeps_a_contact_ramp_at_true_equilibria():
     assert per_it[1] > per_it[0]
 
 
+def test_caps_fallback_keeps_a_contact_ramp_at_true_equilibria():
+    """The fallback "caps" (the exact Hessian with the blocks of the pairs at a segment's end
+    projected, shifted by σM and searched down like "exact") at N = 100: a contact ramp ends
+    every stage converged and stable, never crossing, no accepted step raising the energy, on
+    a path of its own (the exact fallback's stages take other iteration counts)."""
+    wire, lams = Wire(k_b=5, k_s=5e5), (1.0, 7.0, 100.0, 300.0, 1000.0, 2000.0)
+    on, audit = audited_ramp(wire, Ramp(lambdas=lams, fallback="caps"), seed=2)
+    assert on.converged and not audit.violations, audit.violations[:5]
+    assert on.stages[-1].energy.hard_core > 0
+    assert_stage_bookkeeping(on)
+    exact = run_ramp(wire, Ramp(lambdas=lams, fallback="exact"), seed=2)
+    assert [s.result.iterations for s in on.stages] != [s.result.iterations for s in exact.stages]
+
+
 def test_default_schedule():
     s = default_schedule()
     assert len(s) == 44
@@ -1126,13 +1140,14 @@ def test_the_fallback_enters_the_run_id_as_the_path_the_run_takes(monkeypatch):
     from crumple.sweep.store import run_id
 
     small, big = Wire(k_b=5, k_s=5e5, n_segments=1000), Wire(k_b=5, k_s=5e5, n_segments=1001)
-    ramps = {f: Ramp(lambdas=(1, 10), fallback=f) for f in ("auto", "projected", "exact")}
+    ramps = {f: Ramp(lambdas=(1, 10), fallback=f) for f in ("auto", "projected", "exact", "caps")}
     legacy = Ramp.from_dict({k: v for k, v in ramps["auto"].to_dict().items()
                              if k != "fallback"})  # fmt: skip
     ids = {f: run_id(small, r, 0, 0) for f, r in ramps.items()}
     assert ids["auto"] == ids["projected"] == run_id(small, legacy, 0, 0) != ids["exact"]
     ids = {f: run_id(big, r, 0, 0) for f, r in ramps.items()}
     assert ids["auto"] == ids["exact"] != ids["projected"]
+    assert len({ids["exact"], ids["projected"], ids["caps"]}) == 3
     assert relax.resolve_fallback("auto", small) == "projected"
     assert relax.resolve_fallback("auto", big) == "exact"
     monkeypatch.setattr(relax, "FALLBACK", "exact")

@@ -132,11 +132,12 @@ class Ramp:
         contact acts (:func:`crumple.relax.minimize_wire`). Default (None): resolved here to
         :data:`crumple.relax.CURVED_STEPS` for Newton, so that ``to_dict``, the run id and the
         sweep workers hold the switch; always False for Powell.
-    fallback : {"auto", "projected", "exact"} or None
+    fallback : {"auto", "projected", "exact", "caps"} or None
         Newton only: its step where the exact Hessian is indefinite. Default (None): resolved
         here to :data:`crumple.relax.FALLBACK`, "auto": the exact Hessian shifted for wires of
         more than :data:`crumple.relax.EXACT_FALLBACK_ABOVE` segments, the contact-projected
         one below (measured; docs/performance.md, "The fallback by size"); "auto" for Powell.
+        "caps": the exact one with the contacts at a segment's end projected (opt-in).
 
     Examples
     --------

@@ -74,11 +74,16 @@ CURVED_MAX_TURN = 1.0
 #: and stable; CPU about equal at N ≤ 1000 and 1.2–4× less above. The threshold keeps every
 #: ramp of the reproduction and of the continuum study (N ≤ 1000) on the branches it has
 #: always reached, bit for bit: both fallbacks reach true minima, only which snap-through
-#: branch differs.
+#: branch differs. "caps" (opt-in) is "exact" with the blocks of the contacts whose closest
+#: point is a segment's end projected on their positive part: their curvature -F/D is the
+#: polyline's corner at the scale d, and it set the fallback's largest shifts. Measured
+#: (docs/performance.md, "The joint caps' curvature"): it removes most of those shifts, and
+#: the default ramp's contact stages take 11 % fewer iterations at N = 10⁴ (eight seeds), as
+#: many at N ≤ 5000, N = 10⁵ unmeasured: not the default (the contact springs bound the steps).
 FALLBACK = "auto"
 EXACT_FALLBACK_ABOVE = 1000
 EXACT_SHIFT_DESCENTS = 4
-FALLBACKS = ("auto", "projected", "exact")
+FALLBACKS = ("auto", "projected", "exact", "caps")
 #: Wires of more than this many segments take Newton's accurate steps
 #: (``newton(accurate_steps=True)``: truncated CG on the element-form product where the
 #: assembled Hessian cannot resolve τ) and the polish of a stage stopped at the force
@@ -225,7 +230,7 @@ def minimize_wire(
         Only at points where no contact acts. Default :data:`CURVED_STEPS` (off); never with
         fixed nodes. Like ``anticipate_contacts`` it
         changes the path, not the criteria (docs/performance.md, "Curved steps").
-    fallback : {"auto", "projected", "exact"}, optional
+    fallback : {"auto", "projected", "exact", "caps"}, optional
         Newton: the step where the exact Hessian is indefinite (:data:`FALLBACK`, the default,
         says what each is and what was measured). Like ``curved_steps``, it changes the path,
         not the criteria.
@@ -252,7 +257,7 @@ def minimize_wire(
     >>> r.converged
     True
     """
-    exact = resolve_fallback(fallback, wire) == "exact"
+    fallback = resolve_fallback(fallback, wire)
     energy = WireEnergy(wire, lam, rest_angles=rest_angles)
     x0, fixed = _checked_start(wire, positions, fixed, method)
     radius = wire.cavity_radius
@@ -282,7 +287,7 @@ def minimize_wire(
         )
     if method != "newton":
         raise ValueError(f"method must be 'newton' or 'powell', got {method!r}")
-    kw = _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts)
+    kw = _newton_options(wire, energy, fixed, fallback, curved_steps, anticipate_contacts)
     kw.update(ftol=ftol, maxiter=maxiter, max_step=max_step, feasible=feasible)
     report = None if callback is None else _read_only(callback)
     res = newton(energy, x0, **kw, callback=report)
@@ -329,9 +334,9 @@ def _checked_start(wire: Wire, positions, fixed, method):
     return x0, fixed
 
 
-def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contacts) -> dict:
-    """:func:`crumple.minimize.newton`'s keywords for this wire and energy (``exact``: the
-    exact fallback), but the stopping rule, the step cap and the feasibility test
+def _newton_options(wire, energy, fixed, fallback, curved_steps, anticipate_contacts) -> dict:
+    """:func:`crumple.minimize.newton`'s keywords for this wire and energy (``fallback``: as
+    :func:`resolve_fallback` gives it), but the stopping rule, the step cap and the feasibility test
     (:func:`minimize_wire` adds them)."""
     free_rotation = fixed is None or not fixed.any()  # with any node fixed, no rigid motion
     curved = (CURVED_STEPS if curved_steps is None else bool(curved_steps)) and free_rotation
@@ -343,11 +348,8 @@ def _newton_options(wire, energy, fixed, exact, curved_steps, anticipate_contact
     )
     return dict(
         hess=hess,
-        # contacts projected on their positive part; bending and stretching exact (measured:
-        # projecting the joints too doubled the iterations of the default ramp). The exact
-        # fallback is `hess` itself, so the minimiser reuses the H it has just evaluated.
-        hess_fallback=hess if exact else (lambda x: energy.hessian_csc(x, project_contacts=True)),
-        shift_descents=EXACT_SHIFT_DESCENTS if exact else 0,
+        hess_fallback=_fallback_hessian(energy, fallback, hess),
+        shift_descents=0 if fallback == "projected" else EXACT_SHIFT_DESCENTS,
         step_limit=_step_limit(wire.cavity_radius),
         curvature_tol=STABILITY_TOL,
         metric=node_lengths(wire),
@@ -388,8 +390,20 @@ def _above(wire: Wire, threshold: int | None) -> bool:
     return threshold is not None and wire.n_segments > threshold
 
 
+def _fallback_hessian(energy: WireEnergy, fallback: str, hess):
+    """``newton(hess_fallback=...)`` of a resolved ``fallback``. "projected": the contacts
+    projected on their positive part, bending and stretching exact (measured: projecting the
+    joints too doubled the iterations of the default ramp); "caps": only the contacts at a
+    segment's end projected; "exact": ``hess`` itself, the very object the minimiser calls
+    for H, so that it reuses the H it has just evaluated."""
+    if fallback == "exact":
+        return hess
+    projection = True if fallback == "projected" else "caps"
+    return lambda x: energy.hessian_csc(x, project_contacts=projection)
+
+
 def resolve_fallback(fallback: str | None, wire: Wire) -> str:
-    """``fallback`` (None: :data:`FALLBACK`) as "projected" or "exact" for ``wire``.
+    """``fallback`` (None: :data:`FALLBACK`) as "projected", "exact" or "caps" for ``wire``.
 
     >>> resolve_fallback("auto", Wire(k_b=5, k_s=5e5, n_segments=100))
     'projected'

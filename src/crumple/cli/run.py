@@ -547,9 +547,10 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--fallback",
-        choices=["auto", "projected", "exact"],
+        choices=["auto", "projected", "exact", "caps"],
         help="Newton: the step where the Hessian is indefinite (default auto: exact above "
-        "1000 segments, contact-projected below)",
+        "1000 segments, contact-projected below; caps: exact with the contacts at a "
+        "segment's end projected)",
     )
     p.add_argument(
         "--overwrite",
