@@ -709,10 +709,12 @@ def test_caps_projection_projects_only_the_pairs_at_a_segments_end():
         same, other = (False, True) if name == "middle" else (True, False)
         np.testing.assert_array_equal(h["caps"], h[same])
         assert not np.allclose(h["caps"], h[other]), name
-        sparse = energy.hessian_csc(pos, project_contacts="caps").tocsc().toarray()
-        np.testing.assert_array_equal(sparse, h["caps"])
-    with pytest.raises(ValueError, match="project_contacts"):
-        energy.hessian(pos, project_contacts="ends")
+        for _ in range(2):  # the triplets' route, then the values' into the kept pattern
+            sparse = energy.hessian_csc(pos, project_contacts="caps").tocsc().toarray()
+            np.testing.assert_array_equal(sparse, h["caps"])
+    for bad in ("ends", None, 2):
+        with pytest.raises(ValueError, match="project_contacts"):
+            energy.hessian(pos, project_contacts=bad)
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -309,6 +309,38 @@ def test_caps_fallback_keeps_a_contact_ramp_at_true_equilibria():
     assert [s.result.iterations for s in on.stages] != [s.result.iterations for s in exact.stages]
 
 
+def test_each_fallback_gives_newton_its_own_hessian_and_shift_search():
+    """``minimize_wire(fallback=...)``'s wiring (``relax._newton_options``): "exact" hands
+    Newton H itself (the very object, so that it is not assembled twice) with the σ search,
+    "caps" the Hessian with the caps projected with the σ search, "projected" every contact
+    projected without it; on a wire in contact at both kinds of pair the three differ."""
+    import crumple.relax as rx
+
+    m = 7
+    seg = 1.0 / (2 * m)
+    wire = Wire(k_b=1, k_s=1e3, n_segments=2 * m, hard_core=0.3 * seg, hard_core_energy=1.0)
+    # a hairpin, its upper strand 0.12 segments above the lower one and a tenth of a segment
+    # off its nodes: each upper node faces a segment's middle and a joint's cap
+    lower = np.c_[np.arange(m + 1) * seg, np.zeros(m + 1)]
+    upper = np.c_[(m - 0.1 - np.arange(m)) * seg, np.full(m, 0.12 * seg)]
+    x = np.vstack([lower, upper])
+    energy = WireEnergy(wire, 10.0)
+    kw = {f: rx._newton_options(wire, energy, None, f, False, True)
+          for f in ("exact", "caps", "projected")}  # fmt: skip
+    assert kw["exact"]["hess_fallback"] is kw["exact"]["hess"]
+    assert kw["caps"]["hess_fallback"] is not kw["caps"]["hess"]
+    assert kw["exact"]["shift_descents"] == kw["caps"]["shift_descents"] == rx.EXACT_SHIFT_DESCENTS
+    assert kw["projected"]["shift_descents"] == 0
+    data = {f: kw[f]["hess_fallback"](x).data for f in kw}
+    expect = {"exact": False, "caps": "caps", "projected": True}
+    for f, p in expect.items():
+        np.testing.assert_array_equal(data[f], energy.hessian_csc(x, project_contacts=p).data)
+    assert not np.array_equal(data["caps"], data["exact"])
+    assert not np.array_equal(data["caps"], data["projected"])
+    with pytest.raises(ValueError, match="fallback"):
+        rx._newton_options(wire, energy, None, "auto", False, True)
+
+
 def test_default_schedule():
     s = default_schedule()
     assert len(s) == 44
@@ -1010,7 +1042,7 @@ def test_the_large_wire_options_start_above_a_thousand_segments(n_segments):
     from crumple.energy import WireEnergy
 
     wire = Wire.from_continuum(bending=0.05, stretching=5000, n_segments=n_segments)
-    kw = rx._newton_options(wire, WireEnergy(wire, 1.0), None, True, False, True)
+    kw = rx._newton_options(wire, WireEnergy(wire, 1.0), None, "exact", False, True)
     large = n_segments > 1000
     assert kw["accurate_steps"] is large and kw["springs_from_segment"] is large
     assert kw["springs_solve_limit"] == (rx.SPRINGS_SOLVE_LIMIT if large else None)

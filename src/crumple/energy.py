@@ -249,18 +249,18 @@ class WireEnergy:
         by its positive part: the Newton minimiser's fallback where the exact Hessian is
         indefinite. The stretching blocks stay exact: their negative transverse stiffness
         under compression is what makes a straight wire buckle, and the fallback must keep it.
-        ``project_contacts="caps"`` projects only the pairs whose closest point is a segment's
-        end: there D is a point-point distance, whose transverse curvature 1/D (the polyline's
-        corner, at the scale d) gives the block a negative eigenvalue of about -2F/D, F the
-        pair's force; pairs on a segment's interior keep their exact block (docs/model.md).
+        ``project_contacts="caps"`` projects only the contacts at a joint's cap, the pairs
+        whose closest point is a segment's end: there D is a point-point distance, whose
+        transverse curvature 1/D (the polyline's corner, at the scale d) gives the block a
+        negative eigenvalue of about -2F/D, F the pair's force; pairs on a segment's interior
+        keep their exact block (docs/model.md). Any other value is a ``ValueError``.
         """
-        project_contacts = _projection(project_contacts)
         x = np.ascontiguousarray(x, dtype=np.float64)
         ndof = x.size
         if dense is None:
             dense = ndof <= DENSE_LIMIT
         if dense:
-            rows, cols, vals = self._triplets(x, project_contacts, project_bending)
+            rows, cols, vals = self._triplets(x, _projection(project_contacts), project_bending)
             h = np.bincount(rows * ndof + cols, weights=vals, minlength=ndof * ndof)
             return h.reshape(ndof, ndof)
         return self.hessian_csc(x, project_contacts=project_contacts,
@@ -385,19 +385,14 @@ class WireEnergy:
 BARRIER_MARGIN = 0.5
 
 
-#: The kernels' codes of ``project_contacts`` (:meth:`WireEnergy.hessian`); a code maps to
-#: itself (0 and 1 are False and True).
-_PROJECTIONS = {False: 0, True: 1, "caps": 2, 2: 2}
-
-
 def _projection(project_contacts) -> int:
-    """``project_contacts`` as the kernels' code: 0 exact, 1 every contact, 2 the caps."""
-    try:
-        return _PROJECTIONS[project_contacts]
-    except (KeyError, TypeError):
-        raise ValueError(
-            f"project_contacts must be False, True or 'caps', got {project_contacts!r}"
-        ) from None
+    """``project_contacts`` (:meth:`WireEnergy.hessian`) as the kernels' code: 0 exact (False),
+    1 every contact (True), 2 the caps ("caps")."""
+    if isinstance(project_contacts, (bool, np.bool_)):
+        return int(project_contacts)
+    if isinstance(project_contacts, str) and project_contacts == "caps":
+        return 2
+    raise ValueError(f"project_contacts must be False, True or 'caps', got {project_contacts!r}")
 
 
 def _csc_pattern(rows, cols, ndof):

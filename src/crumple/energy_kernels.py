@@ -486,7 +486,8 @@ def _contact_triplets(pos, ks, js, width, strength, project, rows, cols, vals, m
             # keep the positive part only: the negative curvature of a contact is a geometric
             # effect of its force, and left in it forces a large global shift that stalls
             # Newton on the wire's soft modes (docs/model.md); 2: only where the closest point
-            # is a segment's end, whose curvature -F/D is that of the polyline's corner
+            # is a segment's end (a joint's cap), whose eigenvalue about -2F/D is the curvature
+            # of the polyline's corner at the scale d
             _project_psd(block6)
         m = _put_block(rows, cols, vals, m, nodes3, block6)
     return m

@@ -207,7 +207,7 @@ class FedWireEnergy:
         ew = self._wall(np.ascontiguousarray(x, dtype=np.float64), with_blocks=False)[0]
         return EnergyTerms(t.bending, t.stretching, t.confinement, t.hard_core, wall=ew)
 
-    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool = False):
+    def hessian(self, x, *, dense: bool | None = None, project_contacts: bool | str = False):
         """The Hessian of ``WireEnergy`` plus the wall's (positive semi-definite) blocks."""
         x = np.ascontiguousarray(x, dtype=np.float64)
         if dense is None:
@@ -224,7 +224,7 @@ class FedWireEnergy:
         np.add.at(h, (rows.ravel(), cols.ravel()), blocks.ravel())
         return h
 
-    def hessian_csc(self, x, *, project_contacts: bool = False, pinned: bool = False) -> CSC:
+    def hessian_csc(self, x, *, project_contacts: bool | str = False, pinned: bool = False) -> CSC:
         """The sparse :meth:`hessian` as a :class:`crumple.linalg.CSC` (the minimiser's hot
         path, as :meth:`crumple.energy.WireEnergy.hessian_csc`): the wall's blocks added
         into the data, each node's own 2 × 2 block being in the pattern (stretching).

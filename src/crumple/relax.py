@@ -74,12 +74,12 @@ CURVED_MAX_TURN = 1.0
 #: and stable; CPU about equal at N ≤ 1000 and 1.2–4× less above. The threshold keeps every
 #: ramp of the reproduction and of the continuum study (N ≤ 1000) on the branches it has
 #: always reached, bit for bit: both fallbacks reach true minima, only which snap-through
-#: branch differs. "caps" (opt-in) is "exact" with the blocks of the contacts whose closest
-#: point is a segment's end projected on their positive part: their curvature -F/D is the
-#: polyline's corner at the scale d, and it set the fallback's largest shifts. Measured
-#: (docs/performance.md, "The joint caps' curvature"): it removes most of those shifts, and
-#: the default ramp's contact stages take 11 % fewer iterations at N = 10⁴ (eight seeds), as
-#: many at N ≤ 5000, N = 10⁵ unmeasured: not the default (the contact springs bound the steps).
+#: branch differs. "caps" (opt-in) is "exact" with the blocks of the contacts at a joint's
+#: cap (the closest point a segment's end) projected on their positive part: their eigenvalue,
+#: about -2F/D, is the polyline's corner at the scale d, and it set the fallback's largest
+#: shifts. Measured (docs/performance.md, "The joint caps' curvature"): it removes most of
+#: those shifts, and the default ramp's contact stages take 11 % fewer iterations at N = 10⁴
+#: (eight seeds, 7 % less CPU), as many at N ≤ 5000. Not the default: N = 10⁵ is unmeasured.
 FALLBACK = "auto"
 EXACT_FALLBACK_ABOVE = 1000
 EXACT_SHIFT_DESCENTS = 4
@@ -391,15 +391,19 @@ def _above(wire: Wire, threshold: int | None) -> bool:
 
 
 def _fallback_hessian(energy: WireEnergy, fallback: str, hess):
-    """``newton(hess_fallback=...)`` of a resolved ``fallback``. "projected": the contacts
-    projected on their positive part, bending and stretching exact (measured: projecting the
-    joints too doubled the iterations of the default ramp); "caps": only the contacts at a
-    segment's end projected; "exact": ``hess`` itself, the very object the minimiser calls
-    for H, so that it reuses the H it has just evaluated."""
+    """``newton(hess_fallback=...)`` of a resolved ``fallback``. "projected": every contact
+    projected on its positive part, bending and stretching exact (measured: projecting the
+    bending blocks too doubled the iterations of the default ramp); "caps": only the contacts
+    at a joint's cap (the closest point a segment's end) projected; "exact": ``hess`` itself,
+    the very object the minimiser calls for H, so that it reuses the H it has just
+    evaluated."""
     if fallback == "exact":
         return hess
-    projection = True if fallback == "projected" else "caps"
-    return lambda x: energy.hessian_csc(x, project_contacts=projection)
+    if fallback == "projected":
+        return lambda x: energy.hessian_csc(x, project_contacts=True)
+    if fallback == "caps":
+        return lambda x: energy.hessian_csc(x, project_contacts="caps")
+    raise ValueError(f"fallback must be 'projected', 'exact' or 'caps' here, got {fallback!r}")
 
 
 def resolve_fallback(fallback: str | None, wire: Wire) -> str:
