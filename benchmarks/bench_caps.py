@@ -39,12 +39,14 @@ import crumple.minimize as minimize
 from crumple.energy_kernels import _contact_triplets
 from crumple.geometry import node_segment_pairs
 from crumple.geometry.distance import _point_segment
+from crumple.minimize import max_force
 from crumple.protocol import Ramp, run_ramp
 from crumple.relax import minimize_wire
 
 
 def _largest_row(v, seg):
-    return float(np.max(np.hypot(*np.reshape(v, (-1, 2)).T))) / seg
+    """The largest node displacement of a step, in segments."""
+    return max_force(np.reshape(v, (-1, 2))) / seg
 
 
 def _pairs_curvature(x, wire):
