@@ -31,6 +31,7 @@ from . import relax
 from .energy import EnergyTerms, WireEnergy
 from .minimize import MinimizeResult
 from .model import Wire
+from .protocol_coarse import check_coarsen, coarse_path
 from .relax import (
     POWELL_RTOL,
     STABILITY_TOL,
@@ -138,6 +139,12 @@ class Ramp:
         more than :data:`crumple.relax.EXACT_FALLBACK_ABOVE` segments, the contact-projected
         one below (measured; docs/performance.md, "The fallback by size"); "auto" for Powell.
         "caps": the exact one with the contacts at a segment's end projected (opt-in).
+    coarsen : int
+        Newton only: run the ramp first on the same continuum wire with N / ``coarsen``
+        segments, and start each stage from the last equilibrium moved as that coarse wire
+        moved over the stage (:mod:`crumple.protocol_coarse`; every stage is still minimised
+        to the wire's own equilibrium). 1 (default): the plain ramp. For the perfect elastic
+        wire with per-length confinement, no cavity and no stage noise.
 
     Examples
     --------
@@ -160,6 +167,7 @@ class Ramp:
     powell_rtol: float | None = None
     curved_steps: bool | None = None
     fallback: str | None = None
+    coarsen: int = 1
 
     def __post_init__(self):
         if self.maxiter is None and self.method in DEFAULT_MAXITER:
@@ -215,6 +223,23 @@ class Ramp:
             raise ValueError(f"maxiter must be >= 1, got {self.maxiter!r}")
         if not (math.isfinite(self.max_step) and self.max_step > 0):
             raise ValueError(f"max_step must be positive, got {self.max_step!r}")
+        self._check_coarsen()
+
+    def _check_coarsen(self):
+        c = self.coarsen
+        try:  # a whole float is an integer (a sweep's canonical numbers are floats)
+            whole = not isinstance(c, (bool, np.bool_)) and c >= 1 and float(c) == int(c)
+        except (TypeError, ValueError, OverflowError):
+            whole = False
+        if not whole:
+            raise ValueError(f"coarsen must be an integer >= 1, got {c!r}")
+        c = int(c)
+        object.__setattr__(self, "coarsen", c)
+        if c > 1 and self.method != "newton":
+            raise ValueError("coarsen is a parameter of method='newton' only")
+        if c > 1 and self.stage_noise > 0:
+            raise ValueError("coarsen > 1 needs stage_noise = 0 (the coarse ramp predicts "
+                             "each stage's start)")  # fmt: skip
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -362,6 +387,7 @@ def run_ramp(
     ramp = Ramp() if ramp is None else ramp
     if iteration is not None and ramp.method != "newton":
         raise ValueError(f"iteration needs method='newton', got {ramp.method!r}")
+    check_coarsen(wire, ramp.coarsen)
     rng = _rng(seed)
     # one BLAS thread: the matrices are small, threads only contend (measured 7x slower with
     # two busy cores) and change the summation order, hence the trajectory, between machines
@@ -376,18 +402,34 @@ def _stage_callback(iteration, i, lam):
     return lambda it, x, energy, max_force: iteration(i, lam, it, energy, max_force)
 
 
+def _stage_start(wire, ramp, rng, path, i, x):
+    """Where stage ``i`` starts from the last equilibrium ``x``: moved as the coarse wire
+    moved (``path``, ``ramp.coarsen`` > 1), or kicked by the stage noise (scaled down by
+    collision detection so that it cannot cross), or ``x`` itself."""
+    if path is not None:
+        return path.start(i, x)
+    if ramp.stage_noise > 0:
+        kick = ramp.stage_noise * wire.rest_length * rng.standard_normal(x.shape)
+        safe = _step_limit(wire.cavity_radius)(x, kick)
+        return x + (kick if safe >= 1.0 else 0.5 * safe * kick)
+    return x
+
+
 def _run_ramp(wire, ramp, rng, progress, iteration=None):
     t0 = time.perf_counter()
     # drawn first, and only for an imperfect wire, so that perfect wires keep their streams
     rest = rng.normal(0.0, wire.rest_angle_sd, wire.n_nodes - 2) if wire.rest_angle_sd else None
-    x = initial_state(wire, ramp.initial_noise, seed=rng)
+    path = None
+    if ramp.coarsen > 1:  # the coarse ramp draws the initial noise, at its own nodes
+        path = coarse_path(wire, ramp, rng, lambda w, r, g: _run_ramp(w, r, g, None))
+        x = path.initial
+    else:
+        x = initial_state(wire, ramp.initial_noise, seed=rng)
     initial = x.copy()
     stages: list[Stage] = []
     for i, lam in enumerate(ramp.lambdas):
-        if ramp.stage_noise > 0:
-            kick = ramp.stage_noise * wire.rest_length * rng.standard_normal(x.shape)
-            safe = _step_limit(wire.cavity_radius)(x, kick)
-            x = x + (kick if safe >= 1.0 else 0.5 * safe * kick)
+        before = x
+        x = _stage_start(wire, ramp, rng, path, i, x)
         res = minimize_wire(
             wire,
             x,
@@ -403,7 +445,7 @@ def _run_ramp(wire, ramp, rng, progress, iteration=None):
             fallback=ramp.fallback,
             callback=_stage_callback(iteration, i, lam),
         )
-        moved = float(np.max(np.hypot(*(res.x - x).T)))
+        moved = float(np.max(np.hypot(*(res.x - (x if path is None else before)).T)))
         x = res.x
         terms = WireEnergy(wire, lam, rest_angles=rest).terms(x)
         stage = Stage(lam=lam, positions=x, energy=terms, result=res)

@@ -50,7 +50,7 @@ _WIRE_KEYS = {
 }
 _RAMP_KEYS = (
     "initial_noise", "stage_noise", "stop_tol", "method", "ftol", "maxiter", "max_step",
-    "curved_steps", "fallback",
+    "curved_steps", "fallback", "coarsen",
 )  # fmt: skip
 _RUN_KEYS = ("replicas", "seed", "workers", "out", "figure_lambdas", "overwrite")
 #: The tables of a run's TOML file ([protocol]: kind = "ramp" | "injection", and the
@@ -517,6 +517,8 @@ _FLAGS = [
      "transverse noise of the initial wire [segment lengths] (default 0.01)"),
     ("--stage-noise", float, "random kick before every stage [segment lengths] (default 0)"),
     ("--stop-tol", float, "stop when no node moves more than this [length] (default: never)"),
+    ("--coarsen", int, "Newton: start each stage where the same continuum wire with N/COARSEN "
+     "segments, ramped first, predicts (default 1: the plain ramp)"),
     ("--replicas", int, "independent replicas (default 1)"),
     ("--workers", int, "parallel processes, >= 1 (default: cores, at most one per replica)"),
     ("--seed", int, "base seed (default 0)"),

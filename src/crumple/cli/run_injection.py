@@ -90,6 +90,7 @@ def _injection(args, cfg: dict):
         "method",
         "curved_steps",
         "fallback",
+        "coarsen",
     ):
         if getattr(args, key) is not None:
             raise CLIError(f"--{key.replace('_', '-')} is a ramp flag, not an injection's")

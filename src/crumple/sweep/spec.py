@@ -22,6 +22,7 @@ import numpy as np
 from ..injection import Injection
 from ..model import Plasticity, Wire
 from ..protocol import Ramp, default_schedule, initial_state
+from ..protocol_coarse import check_coarsen
 from .store import Run, _canonical, canonical_json
 
 _FACTORY_KEYS = ("young", "radius", "bending", "stretching")
@@ -531,6 +532,7 @@ def _build(spec: dict, where: str) -> tuple[Wire, Ramp | Injection]:
         # the first configuration free of crossings): checked here by the model's own code,
         # so that a bad value stops the sweep before anything is submitted
         initial_state(wire, ramp.initial_noise, seed=0)
+        check_coarsen(wire, ramp.coarsen)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"[ramp]{at}: {exc}") from None
     return wire, ramp

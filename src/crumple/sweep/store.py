@@ -116,7 +116,7 @@ ID_NEUTRAL = MappingProxyType(
     {
         "wire": {"rest_angle_sd": 0.0, "cavity_radius": None},
         # "auto" enters the id as what it resolves to for the wire (_canonical_params)
-        "ramp": {"powell_rtol": None, "curved_steps": False, "fallback": "projected"},
+        "ramp": {"powell_rtol": None, "curved_steps": False, "fallback": "projected", "coarsen": 1},
     }
 )
 

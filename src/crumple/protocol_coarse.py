@@ -1,0 +1,133 @@
+"""The ramp predicted by a coarser wire (``Ramp(coarsen=m)``, opt-in).
+
+The continuum wire (fixed B, S; :meth:`crumple.model.Wire.from_continuum`) follows the same
+physical path at every N once N resolves its loops: the default schedule's ramps at N = 10⁴ and
+10⁵ have the same radius of gyration to three or four digits at every stage compared (19–31),
+and their stages move the nodes by the same distances, ten times as many segments at 10⁵.
+Newton's steps do not lengthen in proportion: the same stages (19–31) took 1.2–8.3 times the
+iterations at 10⁵ (docs/performance.md, "The ramp predicted by a coarser wire"). A wire of N/m
+segments travels the path in m times fewer segments, and so in fewer iterations, each cheaper.
+
+So the ramp is first run on the same continuum wire with N/m segments (:func:`coarse_wire`),
+and each stage of the wire itself starts from its previous stage's equilibrium moved as the
+coarse wire moved over that stage (:func:`prolong`: the coarse polyline's nodes with m - 1
+points inserted evenly on each segment, the same curve): x_k⁰ = x_{k-1} + P(c_k) - P(c_{k-1}).
+Where that start crosses the wire with itself, it is the coarse equilibrium itself, P(c_k),
+which is the coarse wire's uncrossed curve. From there the stage is minimised as in the plain
+ramp, to a converged and stable equilibrium of the wire of N segments, or reported
+unconverged. The coarse ramp predicts where each stage starts; it decides nothing that is
+reported.
+
+What it changes, and why it is a parameter (default off): a stage starts from a point that is
+not the previous equilibrium, so where a stage snaps through to another branch, the branch is
+the one the coarse wire took, with the wire's own details. The plain ramp's branch at a
+snap-through turns on round-off (docs/performance.md), so neither is privileged. Supported for
+the perfect elastic wire with per-length confinement and no cavity (the wire whose continuum
+limit is defined at fixed B and S), and Newton without stage noise; anything else is refused.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from .geometry import has_crossings
+from .model import Wire
+
+__all__ = ["CoarsePath", "check_coarsen", "coarse_wire", "prolong"]
+
+
+def check_coarsen(wire: Wire, coarsen: int) -> None:
+    """Refuse a wire whose ramp a coarser wire cannot predict with ``coarsen`` (ValueError)."""
+    if coarsen == 1:
+        return
+    reasons = []
+    if wire.n_segments % coarsen:
+        reasons.append(f"n_segments = {wire.n_segments} is not a multiple of coarsen = {coarsen}")
+    elif wire.n_segments // coarsen < 3:
+        reasons.append(f"the coarse wire would have {wire.n_segments // coarsen} segments (< 3)")
+    if wire.confinement != "per-length":
+        reasons.append("the confinement is per node (the coarse wire has no continuum match)")
+    if wire.plasticity is not None:
+        reasons.append("the wire is plastic (its rest angles carry the path's history)")
+    if wire.rest_angle_sd:
+        reasons.append("the wire has random rest angles (quenched at the wire's own joints)")
+    if wire.cavity_radius is not None:
+        reasons.append("the wire is in a cavity")
+    if reasons:
+        raise ValueError("coarsen > 1 cannot predict this ramp: " + "; ".join(reasons))
+
+
+def coarse_wire(wire: Wire, coarsen: int) -> Wire:
+    """The same continuum wire (B, S, L0, hard core, trap) with ``n_segments / coarsen``
+    segments.
+
+    >>> w = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=1000)
+    >>> c = coarse_wire(w, 10)
+    >>> c.n_segments, round(c.bending_stiffness, 12), round(c.stretching_stiffness, 9)
+    (100, 0.05, 5000.0)
+    """
+    check_coarsen(wire, coarsen)
+    return Wire.from_continuum(
+        bending=wire.bending_stiffness,
+        stretching=wire.stretching_stiffness,
+        n_segments=wire.n_segments // coarsen,
+        length=wire.length,
+        hard_core=wire.hard_core,
+        hard_core_energy=wire.hard_core_energy,
+        trap_center=wire.trap_center,
+    )
+
+
+def prolong(positions, coarsen: int) -> np.ndarray:
+    """The polyline ``positions`` with ``coarsen - 1`` points inserted evenly on each segment:
+    the same curve, with ``coarsen`` times the segments.
+
+    >>> prolong([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]], 2).tolist()
+    [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0]]
+    """
+    x = np.asarray(positions, dtype=np.float64)
+    if x.ndim != 2 or x.shape[0] < 2:
+        raise ValueError(f"positions must be an (n, d) polyline, n >= 2; got shape {x.shape}")
+    t = np.arange(coarsen) / coarsen
+    inner = x[:-1, None, :] + t[None, :, None] * (x[1:] - x[:-1])[:, None, :]
+    return np.ascontiguousarray(np.vstack([inner.reshape(-1, x.shape[1]), x[-1:]]))
+
+
+class CoarsePath:
+    """The coarse ramp's equilibria, prolonged, as the predictor of each stage's start.
+
+    ``coarse`` is the coarse ramp's positions: its initial state, then one per stage.
+    ``starts`` counts how each stage started: "moved" (x_{k-1} + P(c_k) - P(c_{k-1})) or
+    "coarse" (P(c_k), where the moved start crossed).
+    """
+
+    def __init__(self, coarse: list[np.ndarray], coarsen: int):
+        self.coarsen = int(coarsen)
+        self._coarse = [np.asarray(c, dtype=np.float64) for c in coarse]
+        self.starts = {"moved": 0, "coarse": 0}
+
+    @property
+    def initial(self) -> np.ndarray:
+        """The wire's initial state: the coarse ramp's, prolonged."""
+        return prolong(self._coarse[0], self.coarsen)
+
+    def start(self, stage: int, x: np.ndarray) -> np.ndarray:
+        """Where stage ``stage`` (0-based) starts, from the last equilibrium ``x``."""
+        now = prolong(self._coarse[stage + 1], self.coarsen)
+        moved = x + (now - prolong(self._coarse[stage], self.coarsen))
+        if np.all(np.isfinite(moved)) and not has_crossings(moved):
+            self.starts["moved"] += 1
+            return moved
+        self.starts["coarse"] += 1
+        return now
+
+
+def coarse_path(wire: Wire, ramp, rng, run: Callable) -> CoarsePath:
+    """Run ``ramp`` on the coarse wire (``run(wire, ramp, rng)``, the plain ramp) and keep its
+    equilibria as a :class:`CoarsePath`. The coarse ramp runs every stage (no ``stop_tol``):
+    the wire's own stages decide where to stop."""
+    coarse = run(coarse_wire(wire, ramp.coarsen), replace(ramp, coarsen=1, stop_tol=None), rng)
+    return CoarsePath([coarse.initial] + [s.positions for s in coarse.stages], ramp.coarsen)

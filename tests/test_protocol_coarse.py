@@ -1,0 +1,252 @@
+"""Tests of crumple.protocol_coarse: the ramp whose stages start where a coarser wire predicts
+(``Ramp(coarsen=m)``).
+
+The prolongation is the same curve; the coarse wire is the same continuum wire; the predicted
+start never crosses; every stage of such a ramp is the wire's own equilibrium (converged,
+stable by dense LAPACK, uncrossed, no energy rise across an accepted step); what cannot be
+predicted is refused; and the plain ramp and its run ids are untouched.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import crumple.protocol as protocol
+from crumple.energy import WireEnergy
+from crumple.geometry import has_crossings
+from crumple.model import Plasticity, Wire
+from crumple.protocol import Ramp, run_ramp
+from crumple.protocol_coarse import CoarsePath, check_coarsen, coarse_wire, prolong
+from crumple.sweep.store import run_id
+from test_protocol import _lowest_curvature_per_length, assert_stage_bookkeeping, audited_ramp
+
+CONTINUUM = {"bending": 0.05, "stretching": 5000.0}
+
+
+def _point_on_segment(p, a, b) -> float:
+    """Distance from p to the segment ab."""
+    ab = b - a
+    t = np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0)
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 12), m=st.integers(1, 6), seed=st.integers(0, 2**32 - 1))
+def test_prolong_is_the_same_curve(n, m, seed):
+    """Every new point lies on its coarse segment, evenly spaced; the coarse nodes are kept;
+    the length is unchanged (to round-off)."""
+    x = np.random.default_rng(seed).normal(size=(n, 2))
+    p = prolong(x, m)
+    assert p.shape == ((n - 1) * m + 1, 2)
+    np.testing.assert_array_equal(p[::m], x)
+    for k in range(n - 1):
+        a, b = x[k], x[k + 1]
+        for j in range(1, m):
+            q = p[k * m + j]
+            assert _point_on_segment(q, a, b) < 1e-12 * (1 + np.abs(x).max())
+            assert np.linalg.norm(q - a) == pytest.approx(j / m * np.linalg.norm(b - a))
+    length = lambda y: np.linalg.norm(np.diff(y, axis=0), axis=1).sum()  # noqa: E731
+    assert length(p) == pytest.approx(length(x), rel=1e-12)
+
+
+def test_prolong_refuses_what_is_not_a_polyline():
+    with pytest.raises(ValueError, match="polyline"):
+        prolong([1.0, 2.0], 2)
+    with pytest.raises(ValueError, match="polyline"):
+        prolong([[1.0, 2.0]], 2)
+
+
+def test_coarse_wire_is_the_same_continuum_wire():
+    """B, S, L0, d, ε and the trap are the fine wire's; k_b and k_s scale with the segment."""
+    w = Wire.from_continuum(**CONTINUUM, n_segments=600, length=2.0, hard_core=3e-5,
+                            hard_core_energy=0.5, trap_center=(0.1, -0.2))  # fmt: skip
+    c = coarse_wire(w, 6)
+    assert c.n_segments == 100 and c.length == 2.0
+    assert c.bending_stiffness == pytest.approx(0.05, rel=1e-14)
+    assert c.stretching_stiffness == pytest.approx(5000.0, rel=1e-14)
+    assert c.k_b == pytest.approx(w.k_b / 6, rel=1e-14)
+    assert c.k_s == pytest.approx(w.k_s / 6, rel=1e-14)
+    assert (c.hard_core, c.hard_core_energy, c.trap_center) == (3e-5, 0.5, (0.1, -0.2))
+    assert c.confinement == "per-length"
+
+
+def test_the_coarse_energy_of_a_smooth_curve_is_the_fine_one():
+    """On an arc (constant curvature κ, unstretched), both wires give the continuum energy
+    B κ² L / 2 + λ ∫ r² ds up to their discretisation errors: the coarse wire is the same
+    physical model."""
+    w = Wire.from_continuum(**CONTINUUM, n_segments=400)
+    c = coarse_wire(w, 4)
+    kappa, lam = 3.0, 50.0
+    s = np.linspace(-0.5, 0.5, 401)
+    fine = np.c_[np.sin(kappa * s), 1 - np.cos(kappa * s)] / kappa
+    coarse = fine[::4]
+    exact = 0.05 * kappa**2 / 2 + lam * np.trapezoid((fine**2).sum(axis=1), s)
+    e_fine = WireEnergy(w, lam).terms(fine)
+    e_coarse = WireEnergy(c, lam).terms(coarse)
+    for e in (e_fine, e_coarse):
+        assert e.bending + e.confinement == pytest.approx(exact, rel=1e-3)
+        assert e.stretching < 1e-6 * exact  # chords of an arc are a little shorter
+
+
+def test_check_coarsen_refuses_what_it_cannot_predict():
+    ok = Wire.from_continuum(**CONTINUUM, n_segments=100)
+    check_coarsen(ok, 1)
+    check_coarsen(ok, 10)
+    check_coarsen(Wire(k_b=5, k_s=5e5, confinement="per-node"), 1)  # the plain ramp: anything
+    cases = [
+        (ok, 7, "not a multiple"),
+        (ok, 50, "2 segments"),
+        (ok.replace(confinement="per-node"), 10, "per node"),
+        (ok.replace(plasticity=Plasticity(s=0.5, theta_p=0.2)), 10, "plastic"),
+        (ok.replace(rest_angle_sd=0.01), 10, "rest angles"),
+        (ok.replace(cavity_radius=0.3), 10, "cavity"),
+    ]
+    for wire, m, why in cases:
+        with pytest.raises(ValueError, match=why):
+            check_coarsen(wire, m)
+        with pytest.raises(ValueError, match=why):
+            run_ramp(wire, Ramp(lambdas=(1.0,), coarsen=m), seed=0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "why"),
+    [
+        ({"coarsen": 0}, "integer >= 1"),
+        ({"coarsen": 2.5}, "integer >= 1"),
+        ({"coarsen": "2"}, "integer >= 1"),
+        ({"coarsen": True}, "integer >= 1"),
+        ({"coarsen": 2, "method": "powell"}, "method='newton' only"),
+        ({"coarsen": 2, "stage_noise": 0.1}, "stage_noise = 0"),
+    ],
+)
+def test_ramp_refuses_a_bad_coarsen(kwargs, why):
+    with pytest.raises(ValueError, match=why):
+        Ramp(**kwargs)
+
+
+def test_coarsen_round_trips_and_leaves_the_plain_ramps_ids():
+    """The parameter is stored with the ramp; at 1 it is left out of the run id (the plain
+    ramp's runs keep their ids), and a coarsened ramp is another run."""
+    r = Ramp(lambdas=(1.0, 10.0), coarsen=5)
+    assert Ramp.from_dict(r.to_dict()) == r and r.to_dict()["coarsen"] == 5
+    assert Ramp(coarsen=5.0) == Ramp(coarsen=5)  # a sweep's canonical numbers are floats
+    w = Wire.from_continuum(**CONTINUUM, n_segments=100)
+    plain = Ramp(lambdas=(1.0, 10.0))
+    assert run_id(w, plain, 0, 0) == run_id(w, Ramp(lambdas=(1.0, 10.0), coarsen=1), 0, 0)
+    assert run_id(w, plain, 0, 0) != run_id(w, r, 0, 0)
+
+
+def _hairpin(gap: float) -> np.ndarray:
+    """Two parallel strands ``gap`` apart joined by a turn, as a coarse polyline."""
+    bottom = np.c_[np.linspace(0.0, 1.0, 6), np.zeros(6)]
+    top = np.c_[np.linspace(1.0, 0.0, 6), np.full(6, gap)]
+    return np.vstack([bottom, top])
+
+
+def test_a_start_that_would_cross_is_the_coarse_equilibrium():
+    """The fine wire's last equilibrium has a node pushed towards the other strand; the coarse
+    wire closes the gap over the stage. Moved as the coarse wire moved, that node would pass
+    through the other strand: the stage starts from the coarse curve instead, which does not
+    cross. Where the moved start does not cross, it is used."""
+    m = 4
+    c0, c1 = _hairpin(0.2), _hairpin(0.05)
+    path = CoarsePath([c0, c1, c1], m)
+    x = path.initial
+    assert not has_crossings(x)
+    bump = x.copy()
+    k = 2 * m + 1  # a node between coarse nodes, on the bottom strand
+    assert bump[k, 1] == 0.0
+    bump[k, 1] = 0.18  # 0.02 below the top strand, which will come down by 0.15
+    assert not has_crossings(bump)
+    assert has_crossings(bump + prolong(c1, m) - prolong(c0, m))
+    start = path.start(0, bump)
+    np.testing.assert_array_equal(start, prolong(c1, m))
+    assert path.starts == {"moved": 0, "coarse": 1}
+    quiet = path.start(1, start)  # the coarse wire does not move: the start is x itself
+    np.testing.assert_array_equal(quiet, start)
+    assert path.starts == {"moved": 1, "coarse": 1}
+
+
+def test_a_coarsened_contact_ramp_reaches_the_wires_own_equilibria():
+    """N = 60 predicted by N = 12, into contact (λ up to 2000): every Newton step audited (no
+    energy rise beyond resolution, never crossed), every stage converged, uncrossed, and
+    stable by dense LAPACK; the stages are the fine wire's (its energy, its number of
+    nodes), and contacts were reached."""
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=60)
+    ramp = Ramp(lambdas=tuple(np.geomspace(1.0, 2000.0, 8)), coarsen=5)
+    result, audit = audited_ramp(wire, ramp, seed=3)
+    assert audit.violations == [] and audit.steps > 0
+    assert result.converged, result.failed_stages
+    assert_stage_bookkeeping(result)
+    for stage in result.stages:
+        assert _lowest_curvature_per_length(wire, stage) >= -protocol.STABILITY_TOL
+    assert result.stages[-1].energy.hard_core > 0
+    # the coarse ramp ran on 12 segments and drew the initial noise there: the initial state
+    # is its prolongation (every fifth node noisy, the others on the segments between)
+    x0 = result.initial
+    np.testing.assert_array_equal(x0, prolong(x0[::5], 5))
+    assert np.abs(x0[::5, 1]).min() > 0
+
+
+def test_coarsen_one_is_the_plain_ramp():
+    """``coarsen=1`` is the plain ramp, bit for bit."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=40)
+    lams = (1.0, 30.0, 300.0)
+    a = run_ramp(wire, Ramp(lambdas=lams), seed=2)
+    b = run_ramp(wire, Ramp(lambdas=lams, coarsen=1), seed=2)
+    for sa, sb in zip(a.stages, b.stages, strict=True):
+        np.testing.assert_array_equal(sa.positions, sb.positions)
+
+
+def test_a_sweep_refuses_a_coarsen_its_wire_cannot_take_before_it_runs():
+    """A sweep's [ramp] coarsen is checked against its [wire] with the sweep itself."""
+    from crumple.sweep import Sweep
+
+    good = Sweep(wire={"n_segments": 60}, ramp={"lambdas": [1, 2], "coarsen": 5})
+    assert next(iter(good.runs())).ramp.coarsen == 5
+    with pytest.raises(ValueError, match=r"\[ramp\].*not a multiple"):
+        Sweep(wire={"n_segments": 61}, ramp={"lambdas": [1, 2], "coarsen": 5})
+
+
+def test_stop_tol_measures_from_the_last_equilibrium_not_the_predicted_start():
+    """``stop_tol`` means "no node moved more than this between two stages": with a predicted
+    start the stage itself moves the wire little (~0.01 here) while the wire moved ~0.2 since
+    the last equilibrium, so the ramp must not stop."""
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=40)
+    lams = (7.696136340726079, 15.194870523363546, 30.0)  # buckled from the first stage on
+    r = run_ramp(wire, Ramp(lambdas=lams, coarsen=4, stop_tol=0.05), seed=1)
+    assert len(r.stages) == 3
+    moved = [np.max(np.hypot(*(b.positions - a.positions).T))
+             for a, b in itertools.pairwise(r.stages)]  # fmt: skip
+    assert min(moved) > 0.05
+    short = run_ramp(wire, Ramp(lambdas=lams, coarsen=4, stop_tol=0.3), seed=1)
+    assert len(short.stages) == 2  # stops once a stage moved less than 0.3
+
+
+def test_the_huge_example_builds_a_coarsened_continuum_ramp():
+    """examples/huge.toml (N = 10⁵, too long for the suite) is read as ``crumple run`` reads
+    it: the continuum wire, a tenth-of-a-segment hard core, and a coarse wire of 10⁴
+    segments that the checks accept."""
+    import argparse
+    from pathlib import Path
+
+    from crumple.cli import run as cli_run
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "huge.toml"
+    parser = argparse.ArgumentParser()
+    sub = parser.add_subparsers()
+    cli_run.register(sub)
+    args = parser.parse_args(["run", "--config", str(path)])
+    built = cli_run.build_run(args)
+    wire, ramp = built[0], built[1]
+    assert wire.n_segments == 100_000 and wire.hard_core <= 0.1 / wire.n_segments
+    assert ramp.coarsen == 10 and ramp.curved_steps
+    check_coarsen(wire, ramp.coarsen)
+    c = coarse_wire(wire, ramp.coarsen)
+    assert c.n_segments == 10_000 and c.hard_core == wire.hard_core
+    assert c.bending_stiffness == pytest.approx(0.05, rel=1e-12)
