@@ -6,6 +6,9 @@
     python benchmarks/bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2] [log=F]
                                   # stages K … K2 in sequence from DIR's K - 1; F: a line per
                                   # Newton iteration (CPU, energy, max force), as it goes
+        (scale and stage also take fallback=auto|projected|exact|caps, the ramp's fallback,
+         and d=X, the hard core instead of hard_core_for(N); scale takes coarsen=M, the ramp
+         predicted by the same wire with N/M segments, Ramp(coarsen=M))
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
@@ -55,8 +58,11 @@ def hard_core_for(n: int) -> float:
     return min(1e-5, 0.1 / n)
 
 
-def continuum_wire(n: int) -> Wire:
-    return Wire.from_continuum(**CONTINUUM, n_segments=n, hard_core=hard_core_for(n))
+def continuum_wire(n: int, hard_core: float | None = None) -> Wire:
+    """The continuum wire of N = ``n`` segments, its hard core ``hard_core`` (None:
+    :func:`hard_core_for`)."""
+    d = hard_core_for(n) if hard_core is None else hard_core
+    return Wire.from_continuum(**CONTINUUM, n_segments=n, hard_core=d)
 
 
 def cpu(fn):
@@ -198,19 +204,21 @@ def _saving(line, n, save):
     return both
 
 
-def bench_scale(ns, seed=0, curved=None, save=None):
+def bench_scale(ns, seed=0, curved=None, save=None, fallback=None, hard_core=None, coarsen=1):
     """The scaling table's rows: the default schedule at each N of ``ns`` (``curved``: the
     ramp's ``curved_steps``, None: the default; ``save``: a folder for each stage's
-    positions, None: none)."""
-    ramp = Ramp(curved_steps=curved)
+    positions, None: none; ``fallback``: the ramp's, None: the default; ``hard_core``: d,
+    None: :func:`hard_core_for`; ``coarsen``: the ramp's, 1: the plain ramp)."""
+    ramp = Ramp(curved_steps=curved, fallback=fallback, coarsen=coarsen)
     print(f"== default schedule (44 stages), continuum B = 0.05, S = 5000, seed {seed}, curved "
-          f"steps {'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
+          f"steps {'on' if ramp.curved_steps else 'off'}, fallback {ramp.fallback}, coarsen "
+          f"{ramp.coarsen} ==")  # fmt: skip
     print(
         "  N | d | smooth its/stage | contact its/stage | ms CPU/iteration | factorisations/it "
         "| max RSS GiB | ramp CPU s | converged | contacts at the last stage"
     )
     for n in ns:
-        wire = continuum_wire(n)
+        wire = continuum_wire(n, hard_core)
         progress = _saving(_stage_line(n) if n >= 10_000 else None, n, save)
         r, t = cpu(lambda wire=wire, p=progress: run_ramp(wire, ramp, seed=seed, progress=p))
         smooth = [s.result.iterations for s in r.stages if s.energy.hard_core == 0]
@@ -227,7 +235,17 @@ def bench_scale(ns, seed=0, curved=None, save=None):
               f"{pairs}", flush=True)  # fmt: skip
 
 
-def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None, log=None):
+def bench_stage(
+    n: int,
+    first: int,
+    last: int,
+    save: str,
+    curved=None,
+    out=None,
+    log=None,
+    fallback=None,
+    hard_core=None,
+):
     """Stages ``first`` … ``last`` (1-based) of the default schedule at N = ``n``, in sequence,
     the first re-minimised from the positions of stage first - 1 that ``scale … save=DIR``
     wrote (the ramp adds no noise between stages by default, so a single stage is the ramp's
@@ -238,16 +256,17 @@ def bench_stage(n: int, first: int, last: int, save: str, curved=None, out=None,
     positions (None: none). ``log``: a file to which each Newton iteration appends a line
     (stage, iteration, CPU since the stage began, energy, max force), flushed: the progress
     of a stage that takes hours (None: none). A saddle escape repeats the iteration number
-    before it; a closing polish is not logged (``minimize_wire``'s callback)."""
+    before it; a closing polish is not logged (``minimize_wire``'s callback). ``fallback`` and
+    ``hard_core``: as :func:`bench_scale`'s."""
     from crumple.relax import minimize_wire
 
-    ramp = Ramp(curved_steps=curved)
+    ramp = Ramp(curved_steps=curved, fallback=fallback)
     if not 2 <= first <= last <= len(ramp.lambdas):
         raise SystemExit(f"stages must be 2 … {len(ramp.lambdas)}, got {first} … {last}")
     x = np.load(os.path.join(save, f"N{n}_stage{first - 1:02d}.npy"))
     print(f"== N = {n}, stages {first} … {last} from {save}'s stage {first - 1}, curved steps "
-          f"{'on' if ramp.curved_steps else 'off'} ==")  # fmt: skip
-    wire, total = continuum_wire(n), 0.0
+          f"{'on' if ramp.curved_steps else 'off'}, fallback {ramp.fallback} ==")  # fmt: skip
+    wire, total = continuum_wire(n, hard_core), 0.0
     for k in range(first, last + 1):
         lam = ramp.lambdas[k - 1]
         report = None if log is None else _iteration_line(log, k)
@@ -683,6 +702,16 @@ def _curved_flag(flags):
     return None if value is None else value == "on"
 
 
+def _hard_core_flag(flags):
+    """``d=X`` as the wire's hard core (absent: None, :func:`hard_core_for`)."""
+    if "d" not in flags:
+        return None
+    d = float(flags["d"])
+    if not d > 0:
+        raise SystemExit(f"d must be a positive length, got {flags['d']!r}")
+    return d
+
+
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "ramp100"
     if what == "ramp100":
@@ -694,17 +723,21 @@ if __name__ == "__main__":
     elif what == "scale":  # scale [N …] [seed=S] [curved=on|off]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
-        bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags), flags.get("save"))
+        bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags), flags.get("save"),
+                    flags.get("fallback"), _hard_core_flag(flags),
+                    int(flags.get("coarsen", 1)))  # fmt: skip
     elif what == "stage":  # stage N K[-K2] DIR [curved=on|off] [save=DIR2]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         args = [v for v in sys.argv[2:] if "=" not in v]
         if len(args) != 3:
             raise SystemExit(
-                "usage: bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2] [log=F]"
+                "usage: bench_scale.py stage N K[-K2] DIR [curved=on|off] [save=DIR2] [log=F] "
+                "[fallback=…] [d=X]"
             )
         first, _, last = args[1].partition("-")
         bench_stage(int(args[0]), int(first), int(last or first), args[2], _curved_flag(flags),
-                    flags.get("save"), flags.get("log"))  # fmt: skip
+                    flags.get("save"), flags.get("log"), flags.get("fallback"),
+                    _hard_core_flag(flags))  # fmt: skip
     elif what == "decrease":  # decrease [N …] [trap=X]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [10_000]

@@ -1,0 +1,112 @@
+"""The ramp predicted by a coarser wire (``Ramp(coarsen=m)``) against the plain ramp.
+
+    python benchmarks/bench_coarsen.py compare N DIR_PLAIN DIR_COARSENED [K-K2]
+    python benchmarks/bench_coarsen.py ramps N [coarsen=10] [seeds=0] [d=X]
+
+``compare``: two saved ramps of the continuum wire at N (``bench_scale.py scale N curved=on
+save=DIR_PLAIN`` and ``… coarsen=M save=DIR_COARSENED``), stage by stage: λ, each one's energy
+(recomputed from the saved positions), their relative difference, each one's radius of
+gyration, and how far apart the two configurations are (the largest node distance in segments
+after the rigid motion, reflections included, that fits them best, with the nodes of one
+taken in either order: the two ramps draw their initial noise at different nodes, so one may
+have buckled to the mirror image of the other, or folded end for end).
+The same energy to many digits and a distance far below a segment: the same minimum.
+
+``ramps``: whole default ramps of the continuum wire (curved steps), plain and coarsened, in one
+process: Newton iterations per contact stage, CPU, converged stages, and the coarse ramp's own
+CPU (the same wire, N/M segments, the same hard core, run alone first).
+Results: docs/performance.md, "The ramp predicted by a coarser wire".
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+from bench_collapse import radius_of_gyration, stage_file
+from bench_scale import continuum_wire
+
+from crumple.energy import WireEnergy
+from crumple.protocol import Ramp, default_schedule, run_ramp
+from crumple.protocol_coarse import coarse_wire
+
+
+def apart(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest node distance between ``a`` and ``b`` after the best rigid motion of ``a``,
+    a reflection allowed (Kabsch without the determinant's correction), and with ``b``'s
+    nodes in either order (the wire's two ends are alike: a ramp may fold it end for end)."""
+
+    def fitted(b):
+        ca, cb = a - a.mean(axis=0), b - b.mean(axis=0)
+        u, _, vt = np.linalg.svd(ca.T @ cb)
+        return float(np.linalg.norm(ca @ (u @ vt) - cb, axis=1).max())
+
+    return min(fitted(b), fitted(b[::-1]))
+
+
+def compare(n: int, plain: str, coarsened: str, first: int = 1, last: int | None = None):
+    lambdas = default_schedule()
+    last = len(lambdas) if last is None else last
+    wire = continuum_wire(n)
+    print(f"== N = {n}: the plain ramp ({plain}) against the coarsened one ({coarsened}) ==")
+    print(
+        "  stage | λ | E plain | E coarsened | relative difference | R_g plain | R_g "
+        "coarsened | apart (segments)"
+    )
+    for k in range(first, last + 1):
+        files = stage_file(plain, n, k), stage_file(coarsened, n, k)
+        if not all(os.path.exists(f) for f in files):
+            continue
+        a, b = (np.load(f) for f in files)
+        energy = WireEnergy(wire, lambdas[k - 1])
+        ea, eb = energy(a)[0], energy(b)[0]
+        print(f"  {k} | {lambdas[k - 1]:.4g} | {ea:.10f} | {eb:.10f} | {(eb - ea) / ea:.1e} | "
+              f"{radius_of_gyration(a):.4f} | {radius_of_gyration(b):.4f} | "
+              f"{apart(a, b) * n:.2g}")  # fmt: skip
+
+
+def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None):
+    wire = continuum_wire(n, hard_core)
+    print(f"== N = {n}, d = {wire.hard_core:g}, default schedule, curved steps: plain against "
+          f"coarsen = {coarsen} ==")  # fmt: skip
+    print("  seed | ramp | iterations | per contact stage | CPU s | converged")
+    for seed in seeds:
+        t0 = time.process_time()
+        run_ramp(coarse_wire(wire, coarsen), Ramp(curved_steps=True), seed=seed)
+        alone = time.process_time() - t0
+        for m in (1, coarsen):
+            t0 = time.process_time()
+            r = run_ramp(wire, Ramp(curved_steps=True, coarsen=m), seed=seed)
+            t = time.process_time() - t0
+            its = [s.result.iterations for s in r.stages]
+            contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
+            name = "plain" if m == 1 else f"coarsen {m} (the coarse ramp alone {alone:.1f} s)"
+            print(f"  {seed} | {name} | {sum(its)} | {np.mean(contact):.1f} ({len(contact)}) | "
+                  f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)}",
+                  flush=True)  # fmt: skip
+
+
+def main(argv):
+    flags = dict(a.split("=", 1) for a in argv if "=" in a)
+    args = [a for a in argv if "=" not in a]
+    if args[:1] == ["compare"] and len(args) in (4, 5):
+        first, last = 1, None
+        if len(args) == 5:
+            a, _, b = args[4].partition("-")
+            first, last = int(a), int(b or a)
+        compare(int(args[1]), args[2], args[3], first, last)
+    elif args[:1] == ["ramps"] and len(args) == 2:
+        seeds = tuple(int(s) for s in flags.get("seeds", "0").split(","))
+        d = float(flags["d"]) if "d" in flags else None
+        ramps(int(args[1]), int(flags.get("coarsen", 10)), seeds, d)
+    else:
+        raise SystemExit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
