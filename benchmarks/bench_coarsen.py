@@ -28,11 +28,11 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-from bench_collapse import radius_of_gyration, stage_file
+from bench_collapse import radius_of_gyration, saved_pairs, stage_file
 from bench_scale import continuum_wire
 
 from crumple.energy import WireEnergy
-from crumple.protocol import Ramp, default_schedule, run_ramp
+from crumple.protocol import Ramp, run_ramp
 from crumple.protocol_coarse import coarse_wire
 
 
@@ -50,22 +50,18 @@ def apart(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def compare(n: int, plain: str, coarsened: str, first: int = 1, last: int | None = None):
-    lambdas = default_schedule()
-    last = len(lambdas) if last is None else last
     wire = continuum_wire(n)
     print(f"== N = {n}: the plain ramp ({plain}) against the coarsened one ({coarsened}) ==")
-    print(
-        "  stage | λ | E plain | E coarsened | relative difference | R_g plain | R_g "
-        "coarsened | apart (segments)"
-    )
-    for k in range(first, last + 1):
-        files = stage_file(plain, n, k), stage_file(coarsened, n, k)
-        if not all(os.path.exists(f) for f in files):
+    print("  stage | λ | E plain | E coarsened | relative difference | R_g plain | R_g "
+          "coarsened | apart (segments)")  # fmt: skip
+    both = lambda k: (stage_file(plain, n, k), stage_file(coarsened, n, k))  # noqa: E731
+    for k, lam, saved in saved_pairs(first, last, both):
+        if saved is None:
             continue
-        a, b = (np.load(f) for f in files)
-        energy = WireEnergy(wire, lambdas[k - 1])
+        a, b = saved
+        energy = WireEnergy(wire, lam)
         ea, eb = energy(a)[0], energy(b)[0]
-        print(f"  {k} | {lambdas[k - 1]:.4g} | {ea:.10f} | {eb:.10f} | {(eb - ea) / ea:.1e} | "
+        print(f"  {k} | {lam:.4g} | {ea:.10f} | {eb:.10f} | {(eb - ea) / ea:.1e} | "
               f"{radius_of_gyration(a):.4f} | {radius_of_gyration(b):.4f} | "
               f"{apart(a, b) * n:.2g}")  # fmt: skip
 

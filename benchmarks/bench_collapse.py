@@ -70,26 +70,34 @@ def stage_file(folder: str, n: int, k: int) -> str:
     return os.path.join(folder, f"N{n}_stage{k:02d}.npy")
 
 
-def bench_collapse(n: int, folder: str, first: int = 2, last: int | None = None, log=None):
+def saved_pairs(first: int, last: int | None, files):
+    """(k, λ_k, (a, b)) for each stage k of the default schedule from ``first`` to ``last``
+    (None: the last), (a, b) loaded from the two paths ``files(k)``, or None where either is
+    not saved."""
     lambdas = default_schedule()
-    last = len(lambdas) if last is None else last
+    for k in range(first, (len(lambdas) if last is None else last) + 1):
+        paths = files(k)
+        saved = all(os.path.exists(p) for p in paths)
+        yield k, lambdas[k - 1], tuple(np.load(p) for p in paths) if saved else None
+
+
+def bench_collapse(n: int, folder: str, first: int = 2, last: int | None = None, log=None):
     segment = 1.0 / n
     its = iterations_from(log)
-    print(f"== N = {n}, stages {first} … {last} of {folder}: how far each stage moved ==")
-    print(
-        "  stage | λ | R_g | R_g / R_g before | moved (segments), median | largest | "
-        "iterations | median moved per iteration"
-    )
-    for k in range(first, last + 1):
-        before, after = stage_file(folder, n, k - 1), stage_file(folder, n, k)
-        if not (os.path.exists(before) and os.path.exists(after)):
-            print(f"  {k} | {lambdas[k - 1]:.4g} | not saved")
+    print(f"== N = {n}, stages {first} … {last or 'the last'} of {folder}: how far each stage "
+          "moved ==")  # fmt: skip
+    print("  stage | λ | R_g | R_g / R_g before | moved (segments), median | largest | "
+          "iterations | median moved per iteration")  # fmt: skip
+    pairs = lambda k: (stage_file(folder, n, k - 1), stage_file(folder, n, k))  # noqa: E731
+    for k, lam, saved in saved_pairs(first, last, pairs):
+        if saved is None:
+            print(f"  {k} | {lam:.4g} | not saved")
             continue
-        a, b = np.load(before), np.load(after)
+        a, b = saved
         d = moved(a, b) / segment
         rg, med = radius_of_gyration(b), float(np.median(d))
         per = f"{its[k]} | {med / its[k]:.2f}" if its.get(k) else "— | —"
-        print(f"  {k} | {lambdas[k - 1]:.4g} | {rg:.4f} | {rg / radius_of_gyration(a):.3f} | "
+        print(f"  {k} | {lam:.4g} | {rg:.4f} | {rg / radius_of_gyration(a):.3f} | "
               f"{med:.1f} | {d.max():.1f} | {per}")  # fmt: skip
 
 
