@@ -18,10 +18,17 @@ from hypothesis import strategies as st
 
 import crumple.protocol as protocol
 from crumple.energy import WireEnergy
-from crumple.geometry import has_crossings
+from crumple.geometry import has_crossings, max_safe_fraction
 from crumple.model import Plasticity, Wire
-from crumple.protocol import Ramp, run_ramp
-from crumple.protocol_coarse import CoarsePath, check_coarsen, coarse_wire, prolong
+from crumple.protocol import Ramp, initial_state, minimize_wire, run_ramp
+from crumple.protocol_coarse import (
+    CoarsePath,
+    CoarseSummary,
+    check_coarsen,
+    coarse_path,
+    coarse_wire,
+    prolong,
+)
 from crumple.sweep.store import run_id
 from test_protocol import _lowest_curvature_per_length, assert_stage_bookkeeping, audited_ramp
 
@@ -54,11 +61,19 @@ def test_prolong_is_the_same_curve(n, m, seed):
     assert length(p) == pytest.approx(length(x), rel=1e-12)
 
 
-def test_prolong_refuses_what_is_not_a_polyline():
+def test_prolong_refuses_what_is_not_a_polyline_or_a_factor():
     with pytest.raises(ValueError, match="polyline"):
         prolong([1.0, 2.0], 2)
     with pytest.raises(ValueError, match="polyline"):
         prolong([[1.0, 2.0]], 2)
+    for bad in (0, 2.5, True, "2"):
+        with pytest.raises(ValueError, match="integer >= 1"):
+            prolong([[0.0, 0.0], [1.0, 0.0]], bad)
+        with pytest.raises(ValueError, match="integer >= 1"):
+            check_coarsen(Wire(k_b=5, k_s=5e5), bad)
+    np.testing.assert_array_equal(
+        prolong([[0.0, 0.0], [1.0, 0.0]], 2.0), [[0, 0], [0.5, 0], [1, 0]]
+    )
 
 
 def test_coarse_wire_is_the_same_continuum_wire():
@@ -129,6 +144,11 @@ def test_ramp_refuses_a_bad_coarsen(kwargs, why):
         Ramp(**kwargs)
 
 
+def test_ramp_takes_any_whole_number_for_coarsen():
+    for ok in (1, 3, 3.0, np.int64(3), 10**30, 2**53 + 1):
+        assert Ramp(coarsen=ok).coarsen == int(ok) and type(Ramp(coarsen=ok).coarsen) is int
+
+
 def test_coarsen_round_trips_and_leaves_the_plain_ramps_ids():
     """The parameter is stored with the ramp; at 1 it is left out of the run id (the plain
     ramp's runs keep their ids), and a coarsened ramp is another run."""
@@ -193,14 +213,73 @@ def test_a_coarsened_contact_ramp_reaches_the_wires_own_equilibria():
     assert np.abs(x0[::5, 1]).min() > 0
 
 
-def test_coarsen_one_is_the_plain_ramp():
-    """``coarsen=1`` is the plain ramp, bit for bit."""
-    wire = Wire(k_b=5, k_s=5e5, n_segments=40)
-    lams = (1.0, 30.0, 300.0)
-    a = run_ramp(wire, Ramp(lambdas=lams), seed=2)
-    b = run_ramp(wire, Ramp(lambdas=lams, coarsen=1), seed=2)
-    for sa, sb in zip(a.stages, b.stages, strict=True):
-        np.testing.assert_array_equal(sa.positions, sb.positions)
+def _plain_reference(wire, ramp, seed):
+    """The plain ramp as docs/model.md states it, written out independently of
+    ``protocol._run_ramp``: the initial state, then per stage the stage noise (scaled down by
+    collision detection), the minimisation, and the early stop measured from the stage's start."""
+    rng = np.random.default_rng(seed)
+    x = initial_state(wire, ramp.initial_noise, seed=rng)
+    out = []
+    for i, lam in enumerate(ramp.lambdas):
+        if ramp.stage_noise > 0:
+            kick = ramp.stage_noise * wire.rest_length * rng.standard_normal(x.shape)
+            safe = max_safe_fraction(x, kick)
+            x = x + (kick if safe >= 1.0 else 0.5 * safe * kick)
+        res = minimize_wire(wire, x, lam, method=ramp.method, ftol=ramp.ftol,
+                            maxiter=ramp.maxiter, max_step=ramp.max_step, rng=rng,
+                            rtol=ramp.powell_rtol, curved_steps=ramp.curved_steps,
+                            fallback=ramp.fallback)  # fmt: skip
+        moved = float(np.max(np.hypot(*(res.x - x).T)))
+        x = res.x
+        out.append(x)
+        if ramp.stop_tol is not None and i > 0 and moved < ramp.stop_tol and res.converged:
+            break
+    return out
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"stage_noise": 0.5, "stop_tol": 0.02}, {"stop_tol": 0.05}, {"stage_noise": 0.3}],
+)
+def test_the_plain_ramp_is_unchanged(kwargs):
+    """With ``coarsen = 1`` (the default) the ramp is the plain protocol bit for bit, its stage
+    noise and early stop included (an independent reference loop, not the protocol's code)."""
+    wire = Wire(k_b=5, k_s=5e5, n_segments=30)
+    ramp = Ramp(lambdas=(1.0, 10.0, 100.0, 110.0, 120.0), **kwargs)
+    got = run_ramp(wire, ramp, seed=4)
+    want = _plain_reference(wire, ramp, 4)
+    assert len(got.stages) == len(want) and got.coarse is None
+    for stage, x in zip(got.stages, want, strict=True):
+        np.testing.assert_array_equal(stage.positions, x)
+
+
+def test_the_coarse_ramp_is_the_plain_ramp_of_the_coarse_wire():
+    """The coarse ramp draws from the ramp's own stream, keeps its other parameters, and runs
+    every stage (its early stop is the wire's, not the coarse wire's): the wire's initial state
+    is the coarse ramp's, prolonged, and its summary counts every stage."""
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=40)
+    lams = (1.0, 1.1, 1.2, 1.3)  # straight: the plain ramp would stop at the second stage
+    ramp = Ramp(lambdas=lams, coarsen=4, stop_tol=1e-3, curved_steps=True, fallback="exact")
+    seen = []
+
+    def run(w, r, g):
+        seen.append(r)
+        return protocol._run_ramp(w, r, g, None)
+
+    path = coarse_path(wire, ramp, np.random.default_rng(7), run)
+    assert seen == [Ramp(lambdas=lams, coarsen=1, curved_steps=True, fallback="exact")]
+    c = coarse_wire(wire, 4)
+    plain = run_ramp(c, seen[0], seed=7)
+    np.testing.assert_array_equal(path.initial, prolong(plain.initial, 4))
+    assert path.summary() == CoarseSummary(
+        n_segments=10, stages=4, converged=4,
+        iterations=sum(s.result.iterations for s in plain.stages),
+        seconds=path.summary().seconds,
+    )  # fmt: skip
+    result = run_ramp(wire, ramp, seed=7)
+    np.testing.assert_array_equal(result.initial, prolong(plain.initial, 4))
+    assert result.coarse.stages == 4 and result.coarse.moved + result.coarse.from_coarse == 2
+    assert len(result.stages) == 2  # the wire's own early stop
 
 
 def test_a_sweep_refuses_a_coarsen_its_wire_cannot_take_before_it_runs():

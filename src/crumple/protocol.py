@@ -31,7 +31,7 @@ from . import relax
 from .energy import EnergyTerms, WireEnergy
 from .minimize import MinimizeResult
 from .model import Wire
-from .protocol_coarse import check_coarsen, coarse_path
+from .protocol_coarse import CoarseSummary, check_coarsen, coarse_path, coarsen_factor
 from .relax import (
     POWELL_RTOL,
     STABILITY_TOL,
@@ -143,7 +143,8 @@ class Ramp:
         Newton only: run the ramp first on the same continuum wire with N / ``coarsen``
         segments, and start each stage from the last equilibrium moved as that coarse wire
         moved over the stage (:mod:`crumple.protocol_coarse`; every stage is still minimised
-        to the wire's own equilibrium). 1 (default): the plain ramp. For the perfect elastic
+        to the wire's own equilibrium; ``initial_noise`` is then drawn at the coarse wire's
+        nodes, in its segment's units). 1 (default): the plain ramp. For the perfect elastic
         wire with per-length confinement, no cavity and no stage noise.
 
     Examples
@@ -226,14 +227,7 @@ class Ramp:
         self._check_coarsen()
 
     def _check_coarsen(self):
-        c = self.coarsen
-        try:  # a whole float is an integer (a sweep's canonical numbers are floats)
-            whole = not isinstance(c, (bool, np.bool_)) and c >= 1 and float(c) == int(c)
-        except (TypeError, ValueError, OverflowError):
-            whole = False
-        if not whole:
-            raise ValueError(f"coarsen must be an integer >= 1, got {c!r}")
-        c = int(c)
+        c = coarsen_factor(self.coarsen)  # a whole float too: a sweep's numbers are floats
         object.__setattr__(self, "coarsen", c)
         if c > 1 and self.method != "newton":
             raise ValueError("coarsen is a parameter of method='newton' only")
@@ -269,7 +263,9 @@ class RampResult:
     """The stages of one ramp, in order, with what produced them.
 
     ``rest_angles`` is the replica's quenched rest turning angles (None for a straight wire,
-    ``wire.rest_angle_sd == 0``).
+    ``wire.rest_angle_sd == 0``). ``coarse``: what the coarse ramp of ``Ramp(coarsen=m)`` did
+    (:class:`crumple.protocol_coarse.CoarseSummary`; None for the plain ramp, and for a ramp
+    read from a file).
     """
 
     wire: Wire
@@ -278,6 +274,7 @@ class RampResult:
     stages: tuple[Stage, ...]
     seconds: float
     rest_angles: np.ndarray | None = None
+    coarse: CoarseSummary | None = None
 
     @property
     def lambdas(self) -> np.ndarray:
@@ -461,6 +458,7 @@ def _run_ramp(wire, ramp, rng, progress, iteration=None):
         stages=tuple(stages),
         seconds=time.perf_counter() - t0,
         rest_angles=rest,
+        coarse=None if path is None else path.summary(),
     )
 
 

@@ -29,18 +29,30 @@ limit is defined at fixed B and S), and Newton without stage noise; anything els
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .geometry import has_crossings
 from .model import Wire
 
-__all__ = ["CoarsePath", "check_coarsen", "coarse_wire", "prolong"]
+__all__ = ["CoarsePath", "CoarseSummary", "check_coarsen", "coarse_path", "coarse_wire", "prolong"]
+
+
+def coarsen_factor(coarsen) -> int:
+    """``coarsen`` as an int >= 1 (a whole float accepted: a sweep's numbers are floats)."""
+    if isinstance(coarsen, (bool, np.bool_)):
+        raise ValueError(f"coarsen must be an integer >= 1, got {coarsen!r}")
+    if isinstance(coarsen, (float, np.floating)) and float(coarsen).is_integer():
+        coarsen = int(coarsen)
+    if not isinstance(coarsen, (int, np.integer)) or coarsen < 1:
+        raise ValueError(f"coarsen must be an integer >= 1, got {coarsen!r}")
+    return int(coarsen)
 
 
 def check_coarsen(wire: Wire, coarsen: int) -> None:
     """Refuse a wire whose ramp a coarser wire cannot predict with ``coarsen`` (ValueError)."""
+    coarsen = coarsen_factor(coarsen)
     if coarsen == 1:
         return
     reasons = []
@@ -61,8 +73,9 @@ def check_coarsen(wire: Wire, coarsen: int) -> None:
 
 
 def coarse_wire(wire: Wire, coarsen: int) -> Wire:
-    """The same continuum wire (B, S, L0, hard core, trap) with ``n_segments / coarsen``
-    segments.
+    """The same continuum wire (B, S, L0, hard core d, trap) with ``n_segments / coarsen``
+    segments. The barrier's ε is kept per node–segment pair, so the coarse wire's contacts are
+    ``coarsen`` times softer per unit length (the hard core is not a continuum term).
 
     >>> w = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=1000)
     >>> c = coarse_wire(w, 10)
@@ -70,6 +83,7 @@ def coarse_wire(wire: Wire, coarsen: int) -> Wire:
     (100, 0.05, 5000.0)
     """
     check_coarsen(wire, coarsen)
+    coarsen = coarsen_factor(coarsen)
     return Wire.from_continuum(
         bending=wire.bending_stiffness,
         stretching=wire.stretching_stiffness,
@@ -88,12 +102,36 @@ def prolong(positions, coarsen: int) -> np.ndarray:
     >>> prolong([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]], 2).tolist()
     [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0]]
     """
+    coarsen = coarsen_factor(coarsen)
     x = np.asarray(positions, dtype=np.float64)
     if x.ndim != 2 or x.shape[0] < 2:
         raise ValueError(f"positions must be an (n, d) polyline, n >= 2; got shape {x.shape}")
     t = np.arange(coarsen) / coarsen
     inner = x[:-1, None, :] + t[None, :, None] * (x[1:] - x[:-1])[:, None, :]
     return np.ascontiguousarray(np.vstack([inner.reshape(-1, x.shape[1]), x[-1:]]))
+
+
+@dataclass(frozen=True, slots=True)
+class CoarseSummary:
+    """What the coarse ramp of ``Ramp(coarsen=m)`` did (``RampResult.coarse``; not stored in
+    a ramp's file): its wire's segments, its stages and how many converged, its Newton
+    iterations and wall seconds, and how the wire's stages started: ``moved`` (the last
+    equilibrium moved as the coarse wire moved) or ``from_coarse`` (the coarse curve, where the
+    moved start would have crossed)."""
+
+    n_segments: int
+    stages: int
+    converged: int
+    iterations: int
+    seconds: float
+    moved: int = 0
+    from_coarse: int = 0
+
+    def __str__(self) -> str:
+        return (f"coarse ramp of {self.n_segments} segments: {self.converged}/{self.stages} "
+                f"stages converged, {self.iterations} Newton iterations, {self.seconds:.1f} s; "
+                f"stages started moved {self.moved}, from the coarse curve "
+                f"{self.from_coarse}")  # fmt: skip
 
 
 class CoarsePath:
@@ -104,10 +142,21 @@ class CoarsePath:
     "coarse" (P(c_k), where the moved start crossed).
     """
 
-    def __init__(self, coarse: list[np.ndarray], coarsen: int):
-        self.coarsen = int(coarsen)
+    def __init__(
+        self, coarse: list[np.ndarray], coarsen: int, summary: CoarseSummary | None = None
+    ):
+        self.coarsen = coarsen_factor(coarsen)
         self._coarse = [np.asarray(c, dtype=np.float64) for c in coarse]
         self.starts = {"moved": 0, "coarse": 0}
+        self._summary = summary
+
+    def summary(self) -> CoarseSummary | None:
+        """The coarse ramp's :class:`CoarseSummary`, with the starts counted so far (None:
+        built without one)."""
+        if self._summary is None:
+            return None
+        return replace(self._summary, moved=self.starts["moved"],
+                       from_coarse=self.starts["coarse"])  # fmt: skip
 
     @property
     def initial(self) -> np.ndarray:
@@ -130,4 +179,12 @@ def coarse_path(wire: Wire, ramp, rng, run: Callable) -> CoarsePath:
     equilibria as a :class:`CoarsePath`. The coarse ramp runs every stage (no ``stop_tol``):
     the wire's own stages decide where to stop."""
     coarse = run(coarse_wire(wire, ramp.coarsen), replace(ramp, coarsen=1, stop_tol=None), rng)
-    return CoarsePath([coarse.initial] + [s.positions for s in coarse.stages], ramp.coarsen)
+    summary = CoarseSummary(
+        n_segments=coarse.wire.n_segments,
+        stages=len(coarse.stages),
+        converged=sum(s.result.converged for s in coarse.stages),
+        iterations=sum(s.result.iterations for s in coarse.stages),
+        seconds=coarse.seconds,
+    )
+    positions = [coarse.initial] + [s.positions for s in coarse.stages]
+    return CoarsePath(positions, ramp.coarsen, summary)

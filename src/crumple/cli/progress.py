@@ -339,5 +339,7 @@ class Progress:
             f"stages, {note}  [{duration(elapsed)} elapsed]",
             force=True,
         )
+        if getattr(result, "coarse", None) is not None:  # Ramp(coarsen=m): its coarse ramp
+            self._write(f"    replica {r}'s {result.coarse}", force=True)
         if self.tty and not self.quiet:
             sys.stderr.write("\n")

@@ -122,6 +122,7 @@ def protocol_kind(args, cfg: dict) -> str:
 def build_run(args):
     """Wire, Ramp and run options from the TOML file overridden by the flags."""
     from ..protocol import Ramp, default_schedule
+    from ..protocol_coarse import check_coarsen
 
     cfg = load_toml(args.config, _TABLES) if args.config else {}
     r = dict(cfg.get("ramp", {}))
@@ -139,6 +140,7 @@ def build_run(args):
             raise CLIError("[ramp] schedule must be a table (lam_min, lam_max, n)")
         r["lambdas"] = default_schedule(**sched)
     ramp = Ramp.from_dict(r)
+    check_coarsen(wire, ramp.coarsen)  # before the output folder and the workers
     for key in _RUN_KEYS:
         v = getattr(args, key)
         if v is not None and v is not False:  # not `in (None, False)`: --workers 0 == False
