@@ -13,8 +13,9 @@ have buckled to the mirror image of the other, or folded end for end).
 The same energy to many digits and a distance far below a segment: the same minimum.
 
 ``ramps``: whole default ramps of the continuum wire (curved steps), plain and coarsened, in one
-process: Newton iterations per contact stage, CPU, converged stages, and the coarse ramp's own
-CPU (the same wire, N/M segments, the same hard core, run alone first).
+process: the wire's Newton iterations (the coarse ramp's not counted) and per contact stage,
+CPU, converged stages, and the coarse ramp's own CPU (the same wire, N/M segments, the same
+hard core, run alone first) and iterations.
 Results: docs/performance.md, "The ramp predicted by a coarser wire".
 """
 
@@ -81,7 +82,8 @@ def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None):
             t = time.process_time() - t0
             its = [s.result.iterations for s in r.stages]
             contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
-            name = "plain" if m == 1 else f"coarsen {m} (the coarse ramp alone {alone:.1f} s)"
+            name = "plain" if m == 1 else (f"coarsen {m} (the coarse ramp alone {alone:.1f} s, "
+                                           f"{r.coarse.iterations} iterations)")  # fmt: skip
             print(f"  {seed} | {name} | {sum(its)} | {np.mean(contact):.1f} ({len(contact)}) | "
                   f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)}",
                   flush=True)  # fmt: skip

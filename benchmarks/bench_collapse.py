@@ -14,7 +14,8 @@ from which each stage's Newton iterations (all its passes) are read and the segm
 node moved per iteration (median) printed beside them. Newton's contact steps move a node by a
 fraction of a segment (docs/performance.md), so such a stage costs iterations in proportion to
 the distance it moves in segments, and that grows with N at a fixed physical distance.
-Results: docs/performance.md, "The late stages are collapses".
+Results: docs/performance.md, "The ramp predicted by a coarser wire", its part "Where a late
+stage's iterations go".
 """
 
 from __future__ import annotations

@@ -233,6 +233,8 @@ def bench_scale(ns, seed=0, curved=None, save=None, fallback=None, hard_core=Non
               f"({len(contact)} stages) | {t / its * 1e3:.2f} | {fac / its:.2f} | {rss:.2f} | "
               f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
               f"{pairs}", flush=True)  # fmt: skip
+        if r.coarse is not None:  # the row's CPU includes it; its iterations are not counted
+            print(f"    {r.coarse}", flush=True)
 
 
 def bench_stage(
