@@ -1,7 +1,8 @@
 """The ramp predicted by a coarser wire (``Ramp(coarsen=m)``) against the plain ramp.
 
     python benchmarks/bench_coarsen.py compare N DIR_PLAIN DIR_COARSENED [K-K2]
-    python benchmarks/bench_coarsen.py ramps N [coarsen=10] [seeds=0] [d=X]
+    python benchmarks/bench_coarsen.py ramps N [coarsen=10] [seeds=0] [d=X] [plain=on|off]
+                                                [pairs=off|on]
 
 ``compare``: two saved ramps of the continuum wire at N (``bench_scale.py scale N curved=on
 save=DIR_PLAIN`` and ``… coarsen=M save=DIR_COARSENED``), stage by stage: λ, each one's energy
@@ -14,8 +15,10 @@ The same energy to many digits and a distance far below a segment: the same mini
 
 ``ramps``: whole default ramps of the continuum wire (curved steps), plain and coarsened, in one
 process: the wire's Newton iterations (the coarse ramp's not counted) and per contact stage,
-CPU, converged stages, and the coarse ramp's own CPU (the same wire, N/M segments, the same
-hard core, run alone first) and iterations.
+CPU (the coarse ramp's included), converged stages, and the coarse ramp's own iterations and
+wall time. ``plain=off`` leaves the plain ramp out; ``pairs=on`` adds the coarsened ramp with
+the coarse wire's barrier ε per node–segment pair (``protocol_coarse.CONTACT_PER_LENGTH =
+False``, the twenty-eighth stop's predictor) as the baseline.
 Results: docs/performance.md, "The ramp predicted by a coarser wire".
 """
 
@@ -32,9 +35,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 from bench_collapse import radius_of_gyration, saved_pairs, stage_file
 from bench_scale import continuum_wire
 
+from crumple import protocol_coarse
 from crumple.energy import WireEnergy
 from crumple.protocol import Ramp, run_ramp
-from crumple.protocol_coarse import coarse_wire
 
 
 def apart(a: np.ndarray, b: np.ndarray) -> float:
@@ -67,26 +70,32 @@ def compare(n: int, plain: str, coarsened: str, first: int = 1, last: int | None
               f"{apart(a, b) * n:.2g}")  # fmt: skip
 
 
-def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None):
+def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pairs=False):
     wire = continuum_wire(n, hard_core)
     print(f"== N = {n}, d = {wire.hard_core:g}, default schedule, curved steps: plain against "
           f"coarsen = {coarsen} ==")  # fmt: skip
-    print("  seed | ramp | iterations | per contact stage | CPU s | converged")
+    print("  seed | ramp | iterations | per contact stage | CPU s | converged | the coarse ramp")
+    runs = [("plain", 1, True)] if plain else []
+    runs.append((f"coarsen {coarsen}", coarsen, True))
+    if pairs:  # the baseline: the coarse wire's ε per pair (the twenty-eighth stop's)
+        runs.append((f"coarsen {coarsen}, ε per pair", coarsen, False))
+    saved = protocol_coarse.CONTACT_PER_LENGTH
     for seed in seeds:
-        t0 = time.process_time()
-        run_ramp(coarse_wire(wire, coarsen), Ramp(curved_steps=True), seed=seed)
-        alone = time.process_time() - t0
-        for m in (1, coarsen):
-            t0 = time.process_time()
-            r = run_ramp(wire, Ramp(curved_steps=True, coarsen=m), seed=seed)
-            t = time.process_time() - t0
+        for name, m, per_length in runs:
+            protocol_coarse.CONTACT_PER_LENGTH = per_length
+            try:
+                t0 = time.process_time()
+                r = run_ramp(wire, Ramp(curved_steps=True, coarsen=m), seed=seed)
+                t = time.process_time() - t0
+            finally:
+                protocol_coarse.CONTACT_PER_LENGTH = saved
             its = [s.result.iterations for s in r.stages]
             contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
-            name = "plain" if m == 1 else (f"coarsen {m} (the coarse ramp alone {alone:.1f} s, "
-                                           f"{r.coarse.iterations} iterations)")  # fmt: skip
+            c = "" if r.coarse is None else (f"{r.coarse.iterations} iterations, "
+                                             f"{r.coarse.seconds:.1f} s wall")  # fmt: skip
             print(f"  {seed} | {name} | {sum(its)} | {np.mean(contact):.1f} ({len(contact)}) | "
-                  f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)}",
-                  flush=True)  # fmt: skip
+                  f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
+                  f"{c}", flush=True)  # fmt: skip
 
 
 def main(argv):
@@ -101,7 +110,14 @@ def main(argv):
     elif args[:1] == ["ramps"] and len(args) == 2:
         seeds = tuple(int(s) for s in flags.get("seeds", "0").split(","))
         d = float(flags["d"]) if "d" in flags else None
-        ramps(int(args[1]), int(flags.get("coarsen", 10)), seeds, d)
+        ramps(
+            int(args[1]),
+            int(flags.get("coarsen", 10)),
+            seeds,
+            d,
+            plain=flags.get("plain", "on") == "on",
+            pairs=flags.get("pairs", "off") == "on",
+        )
     else:
         raise SystemExit(__doc__)
 

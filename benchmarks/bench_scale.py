@@ -8,7 +8,8 @@
                                   # Newton iteration (CPU, energy, max force), as it goes
         (scale and stage also take fallback=auto|projected|exact|caps, the ramp's fallback,
          and d=X, the hard core instead of hard_core_for(N); scale takes coarsen=M, the ramp
-         predicted by the same wire with N/M segments, Ramp(coarsen=M))
+         predicted by the same wire with N/M segments, Ramp(coarsen=M), and with it
+         coarsest=none|K, protocol_coarse.COARSEST, and pairs=on, the coarse wire's ε per pair)
     python benchmarks/bench_scale.py decrease [N …] [trap=X]  # the force-resolution test
     python benchmarks/bench_scale.py bits            # the iterates' fingerprint (bit for bit?)
     python benchmarks/bench_scale.py lbfgs           # one stage: Newton vs SciPy L-BFGS-B
@@ -50,6 +51,20 @@ from crumple.model import Wire
 from crumple.protocol import Ramp, default_schedule, initial_state, minimize_wire, run_ramp
 
 CONTINUUM = {"bending": 0.05, "stretching": 5000.0}
+
+
+def _coarse_flags(flags):
+    """``coarsest=none|K`` and ``pairs=on`` of ``scale``: the predictor's levels
+    (``protocol_coarse.COARSEST``) and its coarse wire's ε per node–segment pair
+    (``protocol_coarse.CONTACT_PER_LENGTH = False``), both the twenty-eighth stop's
+    predictor."""
+    from crumple import protocol_coarse
+
+    if "coarsest" in flags:
+        v = flags["coarsest"]
+        protocol_coarse.COARSEST = None if v == "none" else int(v)
+    if flags.get("pairs") == "on":
+        protocol_coarse.CONTACT_PER_LENGTH = False
 
 
 def hard_core_for(n: int) -> float:
@@ -725,6 +740,7 @@ if __name__ == "__main__":
     elif what == "scale":  # scale [N …] [seed=S] [curved=on|off]
         flags = dict(a.split("=") for a in sys.argv[2:] if "=" in a)
         ns = [int(v) for v in sys.argv[2:] if "=" not in v] or [100, 1000]
+        _coarse_flags(flags)
         bench_scale(ns, int(flags.get("seed", 0)), _curved_flag(flags), flags.get("save"),
                     flags.get("fallback"), _hard_core_flag(flags),
                     int(flags.get("coarsen", 1)))  # fmt: skip

@@ -77,7 +77,7 @@ def test_prolong_refuses_what_is_not_a_polyline_or_a_factor():
 
 
 def test_coarse_wire_is_the_same_continuum_wire():
-    """B, S, L0, d, ε and the trap are the fine wire's; k_b and k_s scale with the segment."""
+    """B, S, L0, d and the trap are the fine wire's; k_b, k_s and ε scale with the segment."""
     w = Wire.from_continuum(**CONTINUUM, n_segments=600, length=2.0, hard_core=3e-5,
                             hard_core_energy=0.5, trap_center=(0.1, -0.2))  # fmt: skip
     c = coarse_wire(w, 6)
@@ -86,8 +86,40 @@ def test_coarse_wire_is_the_same_continuum_wire():
     assert c.stretching_stiffness == pytest.approx(5000.0, rel=1e-14)
     assert c.k_b == pytest.approx(w.k_b / 6, rel=1e-14)
     assert c.k_s == pytest.approx(w.k_s / 6, rel=1e-14)
-    assert (c.hard_core, c.hard_core_energy, c.trap_center) == (3e-5, 0.5, (0.1, -0.2))
+    assert (c.hard_core, c.trap_center) == (3e-5, (0.1, -0.2))
+    assert c.hard_core_energy == pytest.approx(0.5 * 6, rel=1e-14)
     assert c.confinement == "per-length"
+
+
+def _strands(n: int, gap: float, length: float) -> np.ndarray:
+    """Two straight strands of n segments of ``length``, ``gap`` apart, joined by a segment of
+    length ``gap``: 2 n + 1 segments, every node of one strand facing a node of the other."""
+    out = np.c_[np.arange(n + 1) * length, np.zeros(n + 1)]
+    return np.vstack([out, np.c_[out[::-1, 0], np.full(n + 1, gap)]])
+
+
+@pytest.mark.parametrize("per_length", [True, False])
+def test_the_coarse_contact_costs_the_fine_energy_per_length(monkeypatch, per_length):
+    """Two strands pressed together within the core (the gap 0.4 d, d far below the fine
+    segment), at two strand lengths so that the ends and the turn cancel in the difference:
+    the fine wire lists m times the coarse wire's node–segment pairs per length, so with ε
+    scaled by m (the default) the two wires' hard-core energies per length agree; with ε per
+    pair (``CONTACT_PER_LENGTH = False``) the coarse one is m times lower."""
+    import crumple.protocol_coarse as pc
+
+    monkeypatch.setattr(pc, "CONTACT_PER_LENGTH", per_length)
+    m, d, h = 5, 2e-5, 2e-3  # the coarse segment h, the fine one h / m = 20 d
+
+    def energies(n):
+        w = Wire.from_continuum(**CONTINUUM, n_segments=m * (2 * n + 1), hard_core=d)
+        coarse = _strands(n, 0.4 * d, h)
+        e_fine = WireEnergy(w, 1.0).terms(prolong(coarse, m)).hard_core
+        return e_fine, WireEnergy(coarse_wire(w, m), 1.0).terms(coarse).hard_core
+
+    (f1, c1), (f2, c2) = energies(40), energies(100)
+    assert f2 - f1 > 0
+    ratio = (c2 - c1) / (f2 - f1)
+    assert ratio == pytest.approx(1.0 if per_length else 1.0 / m, rel=1e-9)
 
 
 def test_the_coarse_energy_of_a_smooth_curve_is_the_fine_one():
@@ -280,6 +312,46 @@ def test_the_coarse_ramp_is_the_plain_ramp_of_the_coarse_wire():
     np.testing.assert_array_equal(result.initial, prolong(plain.initial, 4))
     assert result.coarse.stages == 4 and result.coarse.moved + result.coarse.from_coarse == 2
     assert len(result.stages) == 2  # the wire's own early stop
+
+
+def test_the_coarse_ramp_is_itself_predicted_while_its_wire_keeps_coarsest(monkeypatch):
+    """With COARSEST = 10, a wire of 80 segments and coarsen = 2 is predicted by 40, 20 and 10
+    segments: each coarse ramp is the coarsened ramp of its wire (the same stream), the
+    initial state is the coarsest one's prolonged (straight between every eighth node), and
+    the summaries nest. With COARSEST = None only one level runs, the plain coarse ramp."""
+    import crumple.protocol_coarse as pc
+
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=80)
+    ramp = Ramp(lambdas=(1.0, 30.0), coarsen=2, curved_steps=True)
+    monkeypatch.setattr(pc, "COARSEST", 10)
+    assert pc.coarse_levels(80, 2) == [40, 20, 10]
+    seen = []
+
+    def run(w, r, g):
+        seen.append((w.n_segments, r.coarsen))
+        return protocol._run_ramp(w, r, g, None)
+
+    path = coarse_path(wire, ramp, np.random.default_rng(3), run)
+    assert seen == [(40, 2)]  # the inner levels run inside it
+    inner = run_ramp(coarse_wire(wire, 2), Ramp(lambdas=(1.0, 30.0), coarsen=2,
+                                                 curved_steps=True), seed=3)  # fmt: skip
+    np.testing.assert_array_equal(path.initial, prolong(inner.initial, 2))
+    x = path.initial
+    for k in range(10):  # the initial noise is drawn at the 10 segments' nodes
+        group = x[8 * k : 8 * k + 9]
+        u = (group[-1] - group[0]) / np.linalg.norm(group[-1] - group[0])
+        off = (group - group[0]) @ np.array([-u[1], u[0]])
+        assert np.abs(off).max() < 1e-15
+    summary = path.summary()
+    assert (summary.n_segments, summary.inner.n_segments, summary.inner.inner.n_segments) == (
+        40, 20, 10)  # fmt: skip
+    assert summary.inner.inner.inner is None
+    assert "itself predicted by the coarse ramp of 20 segments" in str(summary)
+    result = run_ramp(wire, ramp, seed=3)
+    assert all(s.result.converged for s in result.stages)
+    monkeypatch.setattr(pc, "COARSEST", None)
+    assert pc.coarse_levels(80, 2) == [40]
+    assert coarse_path(wire, ramp, np.random.default_rng(3), run).summary().inner is None
 
 
 def test_a_sweep_refuses_a_coarsen_its_wire_cannot_take_before_it_runs():

@@ -16,7 +16,9 @@ Where that start crosses the wire with itself, it is the coarse equilibrium itse
 which is the coarse wire's uncrossed curve. From there the stage is minimised as in the plain
 ramp, to a converged and stable equilibrium of the wire of N segments, or reported
 unconverged. The coarse ramp predicts where each stage starts; it decides nothing that is
-reported.
+reported. The coarse wire is the same continuum wire (B, S, L0, the hard core d, the trap),
+its barrier's ε scaled by m so that a contact costs the same energy per unit length on both
+(the barrier is a sum over node–segment pairs; :data:`CONTACT_PER_LENGTH`).
 
 What it changes, and why it is a parameter (default off): a stage starts from a point that is
 not the previous equilibrium, so where a stage snaps through to another branch, the branch is
@@ -36,7 +38,31 @@ import numpy as np
 from .geometry import has_crossings
 from .model import Wire
 
-__all__ = ["CoarsePath", "CoarseSummary", "check_coarsen", "coarse_path", "coarse_wire", "prolong"]
+__all__ = [
+    "CoarsePath",
+    "CoarseSummary",
+    "check_coarsen",
+    "coarse_levels",
+    "coarse_path",
+    "coarse_wire",
+    "prolong",
+]
+
+
+#: The coarse wire's barrier ε scaled by the coarsening factor, so that its contacts cost the
+#: same energy per unit length as the wire's (False: ε per pair, the twenty-eighth stop's
+#: predictor, whose coarse contacts were ``coarsen`` times softer per length). Measured over
+#: seeds 0–3 at N = 10⁴ (coarsen = 10): 24–43 % fewer Newton iterations of the wire
+#: (docs/performance.md, "The coarse wire's contacts per length").
+CONTACT_PER_LENGTH = True
+
+
+#: The coarse ramp is itself predicted by a wire ``coarsen`` times coarser (and so on) while
+#: that wire keeps at least this many segments (None: one level only, the twenty-eighth
+#: stop's predictor). At N = 10⁵ with coarsen = 10 the N = 10⁴ ramp is then predicted by
+#: N = 10³: measured (docs/performance.md, "The coarse wire's contacts per length"). 10³
+#: segments put 70 on the loop length (B/λ)^¼ at λ = 2000; coarser levels were not measured.
+COARSEST = 1000
 
 
 def coarsen_factor(coarsen) -> int:
@@ -74,13 +100,17 @@ def check_coarsen(wire: Wire, coarsen: int) -> None:
 
 def coarse_wire(wire: Wire, coarsen: int) -> Wire:
     """The same continuum wire (B, S, L0, hard core d, trap) with ``n_segments / coarsen``
-    segments. The barrier's ε is kept per node–segment pair, so the coarse wire's contacts are
-    ``coarsen`` times softer per unit length (the hard core is not a continuum term).
+    segments. The barrier is a sum over node–segment pairs, and the coarse wire has
+    ``coarsen`` times fewer of them per unit length of contact, so its ε is ``coarsen`` times
+    the wire's: a contact then costs the same energy per unit length on both wires
+    (:data:`CONTACT_PER_LENGTH`; docs/model.md, "The ramp predicted by a coarser wire").
 
     >>> w = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=1000)
     >>> c = coarse_wire(w, 10)
     >>> c.n_segments, round(c.bending_stiffness, 12), round(c.stretching_stiffness, 9)
     (100, 0.05, 5000.0)
+    >>> round(c.hard_core_energy / w.hard_core_energy, 12)
+    10.0
     """
     check_coarsen(wire, coarsen)
     coarsen = coarsen_factor(coarsen)
@@ -90,7 +120,7 @@ def coarse_wire(wire: Wire, coarsen: int) -> Wire:
         n_segments=wire.n_segments // coarsen,
         length=wire.length,
         hard_core=wire.hard_core,
-        hard_core_energy=wire.hard_core_energy,
+        hard_core_energy=wire.hard_core_energy * (coarsen if CONTACT_PER_LENGTH else 1),
         trap_center=wire.trap_center,
     )
 
@@ -126,12 +156,15 @@ class CoarseSummary:
     seconds: float
     moved: int = 0
     from_coarse: int = 0
+    #: What the coarse ramp's own coarse ramp did, where one predicted it (:data:`COARSEST`).
+    inner: CoarseSummary | None = None
 
     def __str__(self) -> str:
-        return (f"coarse ramp of {self.n_segments} segments: {self.converged}/{self.stages} "
+        text = (f"coarse ramp of {self.n_segments} segments: {self.converged}/{self.stages} "
                 f"stages converged, {self.iterations} Newton iterations, {self.seconds:.1f} s; "
                 f"stages started moved {self.moved}, from the coarse curve "
                 f"{self.from_coarse}")  # fmt: skip
+        return text if self.inner is None else f"{text}; itself predicted by the {self.inner}"
 
 
 class CoarsePath:
@@ -174,17 +207,39 @@ class CoarsePath:
         return now
 
 
+def coarse_levels(n_segments: int, coarsen: int) -> list[int]:
+    """The segments of each coarse wire that predicts a ramp of ``n_segments`` with
+    ``coarsen``, the nearest first: a level is predicted by the next while that one keeps at
+    least :data:`COARSEST` segments (and ``coarsen`` divides it).
+
+    >>> coarse_levels(100_000, 10), coarse_levels(10_000, 10), coarse_levels(10_000, 1)
+    ([10000, 1000], [1000], [])
+    """
+    coarsen = coarsen_factor(coarsen)
+    if coarsen == 1:
+        return []
+    levels = [n_segments // coarsen]
+    while (COARSEST is not None and levels[-1] % coarsen == 0
+           and levels[-1] // coarsen >= COARSEST):  # fmt: skip
+        levels.append(levels[-1] // coarsen)
+    return levels
+
+
 def coarse_path(wire: Wire, ramp, rng, run: Callable) -> CoarsePath:
-    """Run ``ramp`` on the coarse wire (``run(wire, ramp, rng)``, the plain ramp) and keep its
-    equilibria as a :class:`CoarsePath`. The coarse ramp runs every stage (no ``stop_tol``):
-    the wire's own stages decide where to stop."""
-    coarse = run(coarse_wire(wire, ramp.coarsen), replace(ramp, coarsen=1, stop_tol=None), rng)
+    """Run ``ramp`` on the coarse wire (``run(wire, ramp, rng)``) and keep its equilibria as a
+    :class:`CoarsePath`. The coarse ramp runs every stage (no ``stop_tol``): the wire's own
+    stages decide where to stop. It is itself predicted by a wire ``coarsen`` times coarser
+    where :func:`coarse_levels` says so, and is the plain ramp otherwise."""
+    inner = ramp.coarsen if len(coarse_levels(wire.n_segments, ramp.coarsen)) > 1 else 1
+    coarse = run(coarse_wire(wire, ramp.coarsen), replace(ramp, coarsen=inner, stop_tol=None),
+                 rng)  # fmt: skip
     summary = CoarseSummary(
         n_segments=coarse.wire.n_segments,
         stages=len(coarse.stages),
         converged=sum(s.result.converged for s in coarse.stages),
         iterations=sum(s.result.iterations for s in coarse.stages),
         seconds=coarse.seconds,
+        inner=coarse.coarse,
     )
     positions = [coarse.initial] + [s.positions for s in coarse.stages]
     return CoarsePath(positions, ramp.coarsen, summary)
