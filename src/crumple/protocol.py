@@ -143,11 +143,10 @@ class Ramp:
         Newton only: run the ramp first on the same continuum wire with N / ``coarsen``
         segments, and start each stage from the last equilibrium moved as that coarse wire
         moved over the stage (:mod:`crumple.protocol_coarse`; every stage is still minimised
-        to the wire's own equilibrium). The coarse ramp is itself predicted so while its
-        wire's N / ``coarsen`` keeps :data:`crumple.protocol_coarse.COARSEST` segments (at
-        N = 10⁵ with 10: 10⁴ predicted by 10³); ``initial_noise`` is drawn at the coarsest
-        wire's nodes, in its segment's units. 1 (default): the plain ramp. For the perfect
-        elastic wire with per-length confinement, no cavity and no stage noise.
+        to the wire's own equilibrium; ``initial_noise`` is then drawn at the coarse wire's
+        nodes, in its segment's units; opt-in, the coarse ramp itself predicted in turn:
+        :data:`crumple.protocol_coarse.COARSEST`). 1 (default): the plain ramp. For the
+        perfect elastic wire with per-length confinement, no cavity and no stage noise.
 
     Examples
     --------

@@ -57,12 +57,14 @@ __all__ = [
 CONTACT_PER_LENGTH = True
 
 
-#: The coarse ramp is itself predicted by a wire ``coarsen`` times coarser (and so on) while
-#: that wire keeps at least this many segments (None: one level only, the twenty-eighth
-#: stop's predictor). At N = 10⁵ with coarsen = 10 the N = 10⁴ ramp is then predicted by
-#: N = 10³: measured (docs/performance.md, "The coarse wire's contacts per length"). 10³
-#: segments put 70 on the loop length (B/λ)^¼ at λ = 2000; coarser levels were not measured.
-COARSEST = 1000
+#: Opt-in: the coarse ramp itself predicted by a wire ``coarsen`` times coarser (and so on)
+#: while that wire keeps at least this many segments (say 1000: at N = 10⁵ with coarsen = 10
+#: the N = 10⁴ ramp is then predicted by N = 10³, whose 10³ segments put 70 on the loop length
+#: (B/λ)^¼ at λ = 2000). None (default): one level. Measured at N = 10⁵ over seeds 0–3
+#: (docs/performance.md, "The coarse wire's contacts per length"): the coarse ramp's cost fell
+#: from ~280–380 s to ~220 s, but the wire's ramps took 1140–1706 s against 976–1007 s for
+#: one level (seeds 0 and 1), and two of the four stopped one stage each unconverged.
+COARSEST = None
 
 
 def coarsen_factor(coarsen) -> int:
@@ -212,8 +214,8 @@ def coarse_levels(n_segments: int, coarsen: int) -> list[int]:
     ``coarsen``, the nearest first: a level is predicted by the next while that one keeps at
     least :data:`COARSEST` segments (and ``coarsen`` divides it).
 
-    >>> coarse_levels(100_000, 10), coarse_levels(10_000, 10), coarse_levels(10_000, 1)
-    ([10000, 1000], [1000], [])
+    >>> coarse_levels(100_000, 10), coarse_levels(10_000, 1)  # COARSEST = None: one level
+    ([10000], [])
     """
     coarsen = coarsen_factor(coarsen)
     if coarsen == 1:
