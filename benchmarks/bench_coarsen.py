@@ -19,7 +19,8 @@ CPU (the coarse ramp's included), converged stages, and the coarse ramp's own it
 wall time. ``plain=off`` leaves the plain ramp out; ``pairs=on`` adds the coarsened ramp with
 the coarse wire's barrier ε per node–segment pair (``protocol_coarse.CONTACT_PER_LENGTH =
 False``, the twenty-eighth stop's predictor) as the baseline.
-Results: docs/performance.md, "The ramp predicted by a coarser wire".
+Results: docs/performance.md, "The ramp predicted by a coarser wire" and "The coarse wire's
+contacts per length".
 """
 
 from __future__ import annotations

@@ -62,7 +62,7 @@ CONTACT_PER_LENGTH = True
 #: the N = 10⁴ ramp is then predicted by N = 10³, whose 10³ segments put 70 on the loop length
 #: (B/λ)^¼ at λ = 2000). None (default): one level. Measured at N = 10⁵ over seeds 0–3
 #: (docs/performance.md, "The coarse wire's contacts per length"): the coarse ramp's cost fell
-#: from ~280–380 s to ~220 s, but the wire's ramps took 1140–1706 s against 976–1007 s for
+#: from 278–448 s to 190–229 s, but the wire's ramps took 1140–1706 s against 976–1007 s for
 #: one level (seeds 0 and 1), and two of the four stopped one stage each unconverged.
 COARSEST = None
 
