@@ -588,6 +588,40 @@ def test_a_long_stage_reports_its_newton_iterations(monkeypatch):
     assert len([m for m in sent if m[0] == "stage"]) == 3
 
 
+def test_a_coarsened_replica_reports_its_coarse_ramp(monkeypatch, capsys):
+    """With ``Ramp(coarsen=m)`` a replica reports the coarse ramp's stages before its own (in
+    this process to ``on_coarse``, from a worker tagged through the queue), the display says
+    which wire they are on and that they only predict, and a quiet run reports none."""
+    import queue
+
+    import crumple.cli.run as clirun
+    from crumple.protocol import Ramp, replica_seeds
+
+    wire = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=40)
+    ramp, seed = Ramp(lambdas=(1.0, 30.0), coarsen=4), replica_seeds(3, 1)[0]
+    order = []
+    clirun._replica(wire, ramp, seed, 0, lambda *a: order.append(("stage", a)), lambda *a: None,
+                    True, lambda *a: order.append(("coarse", a)))  # fmt: skip
+    assert [k for k, _ in order] == ["coarse", "coarse", "stage", "stage"]
+    assert [a[:5] for _, a in order[:2]] == [(0, 10, 0, 2, 1.0), (0, 10, 1, 2, 30.0)]
+    quiet = []
+    clirun._replica(wire, ramp, seed, 0, lambda *a: None, lambda *a: None, False, quiet.append)
+    assert not quiet
+    monkeypatch.setattr(clirun, "_QUEUE", q := queue.Queue())
+    clirun._replica(wire, ramp, seed, 2)
+    sent = [q.get_nowait() for _ in range(q.qsize())]
+    assert [m[0] for m in sent] == ["coarse", "coarse", "stage", "stage"]
+    assert sent[0][:4] == ("coarse", 2, 10, 0)
+    prog = _progress_at(monkeypatch, [0.0, 75.0, 80.0], 1, 2)
+    clirun._dispatch(prog, ("coarse", 0, 10000, 43, 44, 2000.0, False))
+    assert _last_line(capsys).strip() == (
+        "replica 0: the coarse ramp (10000 segments) that predicts the wire's stages, stage "
+        "44/44 (λ = 2000), NOT converged (it only predicts where stages start), 1 min 15 s "
+        "elapsed"
+    )
+    assert prog.stages_done == {} and prog.not_converged == 0  # the wire's count is its own
+
+
 def test_worker_messages_reach_the_display_by_their_kind():
     import crumple.cli.run as clirun
 

@@ -354,6 +354,30 @@ def test_the_coarse_ramp_is_itself_predicted_while_its_wire_keeps_coarsest(monke
     assert coarse_path(wire, ramp, np.random.default_rng(3), run).summary().inner is None
 
 
+def test_the_coarse_ramps_report_their_stages(monkeypatch):
+    """``coarse_progress`` sees every stage of every coarse ramp, the coarsest first, with its
+    wire's segments, and changes nothing; the plain ramp never calls it."""
+    import crumple.protocol_coarse as pc
+
+    wire = Wire.from_continuum(**CONTINUUM, n_segments=80)
+    ramp = Ramp(lambdas=(1.0, 30.0), coarsen=2, curved_steps=True)
+    monkeypatch.setattr(pc, "COARSEST", 20)  # levels of 40 and 20 segments
+    seen = []
+
+    def coarse(n_segments, i, n, stage):
+        seen.append((n_segments, i, n, stage.lam, stage.positions.shape[0]))
+
+    got = run_ramp(wire, ramp, seed=5, coarse_progress=coarse)
+    assert seen == [(20, 0, 2, 1.0, 21), (20, 1, 2, 30.0, 21),
+                    (40, 0, 2, 1.0, 41), (40, 1, 2, 30.0, 41)]  # fmt: skip
+    want = run_ramp(wire, ramp, seed=5)
+    for a, b in zip(got.stages, want.stages, strict=True):
+        np.testing.assert_array_equal(a.positions, b.positions)
+    seen.clear()
+    run_ramp(wire, Ramp(lambdas=(1.0, 30.0)), seed=5, coarse_progress=coarse)
+    assert seen == []
+
+
 def test_a_sweep_refuses_a_coarsen_its_wire_cannot_take_before_it_runs():
     """A sweep's [ramp] coarsen is checked against its [wire] with the sweep itself."""
     from crumple.sweep import Sweep

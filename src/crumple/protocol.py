@@ -341,6 +341,7 @@ def initial_state(wire: Wire, noise: float = 0.01, *, seed=None) -> np.ndarray:
 
 ProgressCallback = Callable[[int, int, Stage], None]
 IterationCallback = Callable[[int, float, int, float, float], None]
+CoarseProgressCallback = Callable[[int, int, int, Stage], None]
 
 
 def run_ramp(
@@ -350,6 +351,7 @@ def run_ramp(
     seed=None,
     progress: ProgressCallback | None = None,
     iteration: IterationCallback | None = None,
+    coarse_progress: CoarseProgressCallback | None = None,
 ) -> RampResult:
     """Run a quasi-static ramp: raise λ stage by stage, minimising at each.
 
@@ -368,6 +370,12 @@ def run_ramp(
         progress within stages that take minutes to hours at large N. It sees no positions
         and cannot change the path. Newton only: with ``ramp.method == "powell"`` it is an
         error.
+    coarse_progress : callable, optional
+        ``coarse_progress(n_segments, i, n_stages, stage)`` after every stage of the coarse
+        ramp that predicts this one (``ramp.coarsen`` > 1; :mod:`crumple.protocol_coarse`),
+        ``n_segments`` its wire's, and of each coarser level's ramp where one predicts it in
+        turn: at N = 10⁵ the coarse ramp runs for minutes before the wire's first stage.
+        Never called for the plain ramp.
 
     Returns
     -------
@@ -390,7 +398,7 @@ def run_ramp(
     # one BLAS thread: the matrices are small, threads only contend (measured 7x slower with
     # two busy cores) and change the summation order, hence the trajectory, between machines
     with threadpool_limits(limits=1, user_api="blas"):
-        return _run_ramp(wire, ramp, rng, progress, iteration)
+        return _run_ramp(wire, ramp, rng, progress, iteration, coarse_progress)
 
 
 def _stage_callback(iteration, i, lam):
@@ -413,13 +421,24 @@ def _stage_start(wire, ramp, rng, path, i, x):
     return x
 
 
-def _run_ramp(wire, ramp, rng, progress, iteration=None):
+def _coarse_stages(coarse_progress, wire):
+    """``progress`` of the coarse ramp on ``wire``: its stages to ``coarse_progress``."""
+    if coarse_progress is None:
+        return None
+    return lambda i, n, stage: coarse_progress(wire.n_segments, i, n, stage)
+
+
+def _run_ramp(wire, ramp, rng, progress, iteration=None, coarse_progress=None):
     t0 = time.perf_counter()
     # drawn first, and only for an imperfect wire, so that perfect wires keep their streams
     rest = rng.normal(0.0, wire.rest_angle_sd, wire.n_nodes - 2) if wire.rest_angle_sd else None
     path = None
     if ramp.coarsen > 1:  # the coarse ramp draws the initial noise, at its own nodes
-        path = coarse_path(wire, ramp, rng, lambda w, r, g: _run_ramp(w, r, g, None))
+
+        def run(w, r, g):  # each coarse level reports its stages with its wire's segments
+            return _run_ramp(w, r, g, _coarse_stages(coarse_progress, w), None, coarse_progress)
+
+        path = coarse_path(wire, ramp, rng, run)
         x = path.initial
     else:
         x = initial_state(wire, ramp.initial_noise, seed=rng)

@@ -328,6 +328,17 @@ class Progress:
             kind="iteration",
         )
 
+    def coarse(self, r: int, n_segments: int, i: int, n: int, lam: float, converged: bool) -> None:
+        """Replica r's coarse ramp (``Ramp(coarsen=m)``, on a wire of ``n_segments``) has
+        finished its stage i of n: it predicts the wire's stages, and runs before them."""
+        bad = "" if converged else ", NOT converged (it only predicts where stages start)"
+        self._write(
+            f"  replica {r}: the coarse ramp ({n_segments} segments) that predicts the wire's "
+            f"stages, stage {i + 1}/{n} (λ = {lam:.4g}){bad}, "
+            f"{duration(time.perf_counter() - self.t0)} elapsed",
+            force=i + 1 == n,
+        )
+
     def replica(self, r: int, result) -> None:
         self.replicas_done += 1
         self.stages_done[r] = self.n_stages  # an early stop counts as all its stages

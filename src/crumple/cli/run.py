@@ -244,10 +244,13 @@ ITERATION_EVERY = 2.0
 _clock = time.monotonic  # the replicas' clock (a test scripts it)
 
 
-def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, iterations=True):
+def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, iterations=True,
+             on_coarse=None):  # fmt: skip
     """Replica ``r``: its stages, and, once a stage has run :data:`ITERATION_EVERY` seconds,
     its Newton iterations at most that often (with the seconds the stage has run), go to
-    ``on_stage`` and ``on_iteration`` in this process, or tagged through the workers' queue."""
+    ``on_stage`` and ``on_iteration`` in this process, or tagged through the workers' queue;
+    with ``iterations``, so do the stages of the coarse ramp that predicts it
+    (``Ramp(coarsen=m)``), to ``on_coarse``."""
     from ..protocol import run_ramp
 
     def send(msg, local):
@@ -268,10 +271,15 @@ def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, ite
             began[1] = now
             send(("iteration", r, i, lam, it, energy, max_force, now - began[0]), on_iteration)
 
+    def coarse(n_segments, i, n, stage):
+        began[:] = [_clock()] * 2  # the wire's first stage starts after the coarse ramp
+        send(("coarse", r, n_segments, i, n, stage.lam, stage.result.converged), on_coarse)
+
     within = iteration if iterations and ramp.method == "newton" else None
     # as crumple.protocol.run_replicas: replica r uses SeedSequence(seed).spawn(n)[r]
     rng = np.random.default_rng(seed_seq)
-    return run_ramp(wire, ramp, seed=rng, progress=progress, iteration=within)
+    return run_ramp(wire, ramp, seed=rng, progress=progress, iteration=within,
+                    coarse_progress=coarse if iterations else None)  # fmt: skip
 
 
 def _dispatch(prog: Progress, msg: tuple) -> None:
@@ -281,6 +289,8 @@ def _dispatch(prog: Progress, msg: tuple) -> None:
         prog.stage(*args)
     elif kind == "iteration":
         prog.iteration(*args)
+    elif kind == "coarse":
+        prog.coarse(*args)
     else:
         raise ValueError(f"unknown progress message {msg!r}")
 
@@ -295,7 +305,8 @@ def run_all(wire, ramp, n_rep: int, seed: int, workers: int, prog: Progress, don
     seeds = replica_seeds(seed, n_rep)
     if workers == 1:
         for r in range(n_rep):
-            done[r] = _replica(wire, ramp, seeds[r], r, prog.stage, prog.iteration, not prog.quiet)
+            done[r] = _replica(wire, ramp, seeds[r], r, prog.stage, prog.iteration, not prog.quiet,
+                               prog.coarse)  # fmt: skip
             prog.replica(r, done[r])
         return
     import multiprocessing as mp
