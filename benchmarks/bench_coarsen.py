@@ -2,7 +2,7 @@
 
     python benchmarks/bench_coarsen.py compare N DIR_PLAIN DIR_COARSENED [K-K2]
     python benchmarks/bench_coarsen.py ramps N [coarsen=10] [seeds=0] [d=X] [plain=on|off]
-                                                [pairs=off|on]
+                                                [pairs=off|on] [cut=off|on]
 
 ``compare``: two saved ramps of the continuum wire at N (``bench_scale.py scale N curved=on
 save=DIR_PLAIN`` and ``… coarsen=M save=DIR_COARSENED``), stage by stage: λ, each one's energy
@@ -18,13 +18,21 @@ process: the wire's Newton iterations (the coarse ramp's not counted) and per co
 CPU (the coarse ramp's included), converged stages, and the coarse ramp's own iterations and
 wall time. ``plain=off`` leaves the plain ramp out; ``pairs=on`` adds the coarsened ramp with
 the coarse wire's barrier ε per node–segment pair (``protocol_coarse.CONTACT_PER_LENGTH =
-False``, the twenty-eighth stop's predictor) as the baseline.
-Results: docs/performance.md, "The ramp predicted by a coarser wire" and "The coarse wire's
-contacts per length".
+False``, the twenty-eighth stop's predictor) as the baseline; ``cut=on`` adds the coarsened
+ramp whose starts keep the hard core on the straight path from the last equilibrium
+(:func:`uncrossed_start`: a candidate start whose path touches is refused, and where both
+do, the moved start is cut halfway to its first touch). The last column counts the stages
+whose straight path (chord) from the last equilibrium has a node touch a segment
+(continuous collision detection): to the next equilibrium, for every ramp (the plain ramp's
+equilibria are joined by the minimiser's steps, which never cross), and to the predicted
+start, for the coarsened ones.
+Results: docs/performance.md, "The ramp predicted by a coarser wire", "The coarse wire's
+contacts per length" and "The predictor's straight path".
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import sys
 import time
@@ -38,6 +46,7 @@ from bench_scale import continuum_wire
 
 from crumple import protocol_coarse
 from crumple.energy import WireEnergy
+from crumple.geometry import max_safe_fraction
 from crumple.protocol import Ramp, run_ramp
 
 
@@ -71,32 +80,75 @@ def compare(n: int, plain: str, coarsened: str, first: int = 1, last: int | None
               f"{apart(a, b) * n:.2g}")  # fmt: skip
 
 
-def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pairs=False):
+def _touches(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether a node touches a segment on the straight path from ``a`` to ``b``."""
+    return max_safe_fraction(a, b - a) < 1.0
+
+
+def _counting(start, touched: list):
+    """``CoarsePath.start`` ``start``, appending to ``touched`` whether each start's chord
+    touches."""
+
+    def counted(path, stage, x):
+        out = start(path, stage, x)
+        touched.append(_touches(x, out))
+        return out
+
+    return counted
+
+
+def uncrossed_start(path, stage: int, x: np.ndarray) -> np.ndarray:
+    """``CoarsePath.start`` that keeps the hard core on the way to the start: the moved start,
+    else the coarse curve, where the straight path from ``x`` to it touches nothing; else the
+    moved start cut halfway to its first touch (as the stage noise is cut)."""
+    now = protocol_coarse.prolong(path._coarse[stage + 1], path.coarsen)
+    moved = x + (now - protocol_coarse.prolong(path._coarse[stage], path.coarsen))
+    for kind, start in (("moved", moved), ("coarse", now)):
+        if max_safe_fraction(x, start - x) >= 1.0:
+            path.starts[kind] += 1
+            return start
+    path.starts["cut"] = path.starts.get("cut", 0) + 1
+    return x + 0.5 * max_safe_fraction(x, moved - x) * (moved - x)
+
+
+def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pairs=False,
+          cut=False):  # fmt: skip
     wire = continuum_wire(n, hard_core)
     print(f"== N = {n}, d = {wire.hard_core:g}, default schedule, curved steps: plain against "
           f"coarsen = {coarsen} ==")  # fmt: skip
-    print("  seed | ramp | iterations | per contact stage | CPU s | converged | the coarse ramp")
-    runs = [("plain", 1, True)] if plain else []
-    runs.append((f"coarsen {coarsen}", coarsen, True))
+    print("  seed | ramp | iterations | per contact stage | CPU s | converged | the coarse ramp "
+          "| chords touched: to the next equilibrium, to the start")  # fmt: skip
+    runs = [("plain", 1, True, False)] if plain else []
+    runs.append((f"coarsen {coarsen}", coarsen, True, False))
     if pairs:  # the baseline: the coarse wire's ε per pair (the twenty-eighth stop's)
-        runs.append((f"coarsen {coarsen}, ε per pair", coarsen, False))
-    saved = protocol_coarse.CONTACT_PER_LENGTH
+        runs.append((f"coarsen {coarsen}, ε per pair", coarsen, False, False))
+    if cut:
+        runs.append((f"coarsen {coarsen}, starts cut at the first touch", coarsen, True, True))
+    saved = protocol_coarse.CONTACT_PER_LENGTH, protocol_coarse.CoarsePath.start
     for seed in seeds:
-        for name, m, per_length in runs:
+        for name, m, per_length, cut_starts in runs:
             protocol_coarse.CONTACT_PER_LENGTH = per_length
+            starts: list[bool] = []
+            protocol_coarse.CoarsePath.start = _counting(
+                uncrossed_start if cut_starts else saved[1], starts
+            )
             try:
                 t0 = time.process_time()
                 r = run_ramp(wire, Ramp(curved_steps=True, coarsen=m), seed=seed)
                 t = time.process_time() - t0
             finally:
-                protocol_coarse.CONTACT_PER_LENGTH = saved
+                protocol_coarse.CONTACT_PER_LENGTH, protocol_coarse.CoarsePath.start = saved
             its = [s.result.iterations for s in r.stages]
             contact = [s.result.iterations for s in r.stages if s.energy.hard_core > 0]
-            c = "" if r.coarse is None else (f"{r.coarse.iterations} iterations, "
-                                             f"{r.coarse.seconds:.1f} s wall")  # fmt: skip
+            c = "" if r.coarse is None else (
+                f"{r.coarse.iterations} iterations, {r.coarse.seconds:.1f} s wall, starts "
+                f"moved {r.coarse.moved}, coarse {r.coarse.from_coarse}, cut "
+                f"{len(r.stages) - r.coarse.moved - r.coarse.from_coarse}")  # fmt: skip
+            xs = [r.initial] + [s.positions for s in r.stages]
+            chords = sum(_touches(a, b) for a, b in itertools.pairwise(xs))
             print(f"  {seed} | {name} | {sum(its)} | {np.mean(contact):.1f} ({len(contact)}) | "
                   f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
-                  f"{c}", flush=True)  # fmt: skip
+                  f"{c} | {chords}, {sum(starts) if starts else '-'}", flush=True)  # fmt: skip
 
 
 def main(argv):
@@ -118,6 +170,7 @@ def main(argv):
             d,
             plain=flags.get("plain", "on") == "on",
             pairs=flags.get("pairs", "off") == "on",
+            cut=flags.get("cut", "off") == "on",
         )
     else:
         raise SystemExit(__doc__)
