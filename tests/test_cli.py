@@ -612,14 +612,79 @@ def test_a_coarsened_replica_reports_its_coarse_ramp(monkeypatch, capsys):
     sent = [q.get_nowait() for _ in range(q.qsize())]
     assert [m[0] for m in sent] == ["coarse", "coarse", "stage", "stage"]
     assert sent[0][:4] == ("coarse", 2, 10, 0)
-    prog = _progress_at(monkeypatch, [0.0, 75.0, 80.0], 1, 2)
+    prog = _progress_at(monkeypatch, [0.0, 75.0, 80.0, 85.0], 1, 2)
     clirun._dispatch(prog, ("coarse", 0, 10000, 43, 44, 2000.0, False))
     assert _last_line(capsys).strip() == (
-        "replica 0: the coarse ramp (10000 segments) that predicts the wire's stages, stage "
-        "44/44 (λ = 2000), NOT converged (it only predicts where stages start), 1 min 15 s "
-        "elapsed"
+        "coarse ramp (10000 segments) stage 44/44, λ = 2000, NOT converged, 1 min 15 s elapsed "
+        "(replica 0; it predicts where the wire's stages start)"
     )
     assert prog.stages_done == {} and prog.not_converged == 0  # the wire's count is its own
+    prog.every = 1e9  # a log's lines at most every 10⁹ s: the coarse ramp's last is forced
+    capsys.readouterr()
+    prog.coarse(0, 10, 1, 3, 10.0, True)
+    prog.coarse(0, 10, 2, 3, 100.0, True)
+    assert [ln.split(",")[0] for ln in capsys.readouterr().err.splitlines()] == [
+        "  coarse ramp (10 segments) stage 3/3"
+    ]
+
+
+def test_the_wires_first_stage_is_timed_from_the_end_of_its_coarse_ramp(monkeypatch):
+    """A coarse ramp of 100 s (a scripted clock) before the wire's first stage: that stage's
+    iterations report the seconds since the coarse ramp ended, not since the replica began."""
+    import crumple.cli.run as clirun
+    import crumple.protocol as protocol
+    from crumple.protocol import Ramp, replica_seeds
+
+    now = [0.0]
+
+    def clock():
+        now[0] += 1.0  # one second per reading
+        return now[0]
+
+    def slow(*args):  # the coarse ramp takes 100 s before its stages report
+        now[0] += 100.0
+        return coarse_path(*args)
+
+    coarse_path = protocol.coarse_path
+    monkeypatch.setattr(clirun, "_clock", clock)
+    monkeypatch.setattr(protocol, "coarse_path", slow)
+    wire = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=40)
+    its, ramp, seed = [], Ramp(lambdas=(30.0, 300.0), coarsen=4), replica_seeds(1, 1)[0]
+    quiet = lambda *a: None  # noqa: E731
+    res = clirun._replica(wire, ramp, seed, 0, quiet, lambda *a: its.append(a), True, quiet)
+    first = [a for a in its if a[1] == 0]
+    assert res.stages[0].result.iterations >= 4 and first
+    assert first[0][6] <= 4.0  # seconds into the stage: 2, not 100-odd
+
+
+def test_one_worker_shows_the_coarse_ramps(monkeypatch):
+    """``run_all`` with one worker hands the display's ``coarse`` to every replica."""
+    import crumple.cli.run as clirun
+    from crumple.protocol import Ramp
+
+    class Display:
+        quiet = False
+
+        def __init__(self):
+            self.seen = []
+
+        def stage(self, *a):
+            self.seen.append("stage")
+
+        def iteration(self, *a):
+            pass
+
+        def coarse(self, r, n_segments, *a):
+            self.seen.append(("coarse", r, n_segments))
+
+        def replica(self, r, result):
+            self.seen.append(("replica", r))
+
+    wire = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=40)
+    prog, done = Display(), {}
+    clirun.run_all(wire, Ramp(lambdas=(1.0, 30.0), coarsen=4), 2, 0, 1, prog, done)
+    one = [("coarse", 0, 10)] * 2 + ["stage"] * 2 + [("replica", 0)]
+    assert prog.seen == one + [("coarse", 1, 10)] * 2 + ["stage"] * 2 + [("replica", 1)]
 
 
 def test_worker_messages_reach_the_display_by_their_kind():

@@ -373,9 +373,10 @@ def run_ramp(
     coarse_progress : callable, optional
         ``coarse_progress(n_segments, i, n_stages, stage)`` after every stage of the coarse
         ramp that predicts this one (``ramp.coarsen`` > 1; :mod:`crumple.protocol_coarse`),
-        ``n_segments`` its wire's, and of each coarser level's ramp where one predicts it in
-        turn: at N = 10⁵ the coarse ramp runs for minutes before the wire's first stage.
-        Never called for the plain ramp.
+        ``n_segments`` the segments of the wire that stage ran on. With nested levels
+        (:data:`crumple.protocol_coarse.COARSEST`) every level reports, the coarsest first. At
+        N = 10⁵ the coarse ramp runs for minutes before the wire's first stage. Never called
+        for the plain ramp.
 
     Returns
     -------

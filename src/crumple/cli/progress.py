@@ -330,12 +330,14 @@ class Progress:
 
     def coarse(self, r: int, n_segments: int, i: int, n: int, lam: float, converged: bool) -> None:
         """Replica r's coarse ramp (``Ramp(coarsen=m)``, on a wire of ``n_segments``) has
-        finished its stage i of n: it predicts the wire's stages, and runs before them."""
-        bad = "" if converged else ", NOT converged (it only predicts where stages start)"
+        finished its stage i of n: it predicts where the wire's stages start, and runs before
+        them. What moves comes first (a terminal's line is cut to its width); its last stage
+        is always logged."""
+        bad = ", NOT converged" if not converged else ""
         self._write(
-            f"  replica {r}: the coarse ramp ({n_segments} segments) that predicts the wire's "
-            f"stages, stage {i + 1}/{n} (λ = {lam:.4g}){bad}, "
-            f"{duration(time.perf_counter() - self.t0)} elapsed",
+            f"  coarse ramp ({n_segments} segments) stage {i + 1}/{n}, λ = {lam:.4g}{bad}, "
+            f"{duration(time.perf_counter() - self.t0)} elapsed (replica {r}; it predicts "
+            "where the wire's stages start)",
             force=i + 1 == n,
         )
 

@@ -283,7 +283,8 @@ def _replica(wire, ramp, seed_seq, r: int, on_stage=None, on_iteration=None, ite
 
 
 def _dispatch(prog: Progress, msg: tuple) -> None:
-    """A worker's message, ``("stage", ...)`` or ``("iteration", ...)``, to ``prog``."""
+    """A worker's message, ``("stage", ...)``, ``("iteration", ...)`` or ``("coarse", ...)``,
+    to ``prog``."""
     kind, *args = msg
     if kind == "stage":
         prog.stage(*args)
