@@ -21,11 +21,13 @@ the coarse wire's barrier ε per node–segment pair (``protocol_coarse.CONTACT_
 False``, the twenty-eighth stop's predictor) as the baseline; ``cut=on`` adds the coarsened
 ramp whose starts keep the hard core on the straight path from the last equilibrium
 (:func:`uncrossed_start`: a candidate start whose path touches is refused, and where both
-do, the moved start is cut halfway to its first touch). The last column counts the stages
-whose straight path (chord) from the last equilibrium has a node touch a segment
-(continuous collision detection): to the next equilibrium, for every ramp (the plain ramp's
-equilibria are joined by the minimiser's steps, which never cross), and to the predicted
-start, for the coarsened ones.
+do, the moved start is cut halfway to its first touch). The last two columns look at the
+path from each equilibrium to the next, for every ramp (the plain ramp's equilibria are joined
+by the minimiser's steps, which never cross), and from the last equilibrium to the predicted
+start, for the coarsened ones: the stages whose straight path (chord) has a node touch a
+segment (continuous collision detection), and, of the node–segment pairs within 3d at both
+ends, how many have the node on the other side of the segment at the far end
+(:func:`side_flips`: a strand passed through the other where they touch).
 Results: docs/performance.md, "The ramp predicted by a coarser wire", "The coarse wire's
 contacts per length" and "The predictor's straight path".
 """
@@ -46,7 +48,7 @@ from bench_scale import continuum_wire
 
 from crumple import protocol_coarse
 from crumple.energy import WireEnergy
-from crumple.geometry import max_safe_fraction
+from crumple.geometry import max_safe_fraction, node_segment_pairs
 from crumple.protocol import Ramp, run_ramp
 
 
@@ -85,16 +87,45 @@ def _touches(a: np.ndarray, b: np.ndarray) -> bool:
     return max_safe_fraction(a, b - a) < 1.0
 
 
-def _counting(start, touched: list):
-    """``CoarsePath.start`` ``start``, appending to ``touched`` whether each start's chord
-    touches."""
+def side_flips(a: np.ndarray, b: np.ndarray, cutoff: float) -> tuple[int, int]:
+    """Of the node–segment pairs closer than ``cutoff`` in both ``a`` and ``b`` whose node
+    projects inside the segment in both, how many have the node on the other side of the
+    segment in ``b`` than in ``a`` (a strand passed through the other where they touch), and
+    how many such pairs there are."""
+    ka, ja = node_segment_pairs(a, cutoff)
+    kb, jb = node_segment_pairs(b, cutoff)
+    pairs = lambda k, j: set(zip(k.tolist(), j.tolist(), strict=True))  # noqa: E731
+    both = sorted(pairs(ka, ja) & pairs(kb, jb))
+    if not both:
+        return 0, 0
+    k, j = np.array(both).T
 
-    def counted(path, stage, x):
+    def side(x):
+        e, r = x[j + 1] - x[j], x[k] - x[j]
+        t = np.einsum("ij,ij->i", r, e) / np.einsum("ij,ij->i", e, e)
+        return np.sign(e[:, 0] * r[:, 1] - e[:, 1] * r[:, 0]), (t > 0) & (t < 1)
+
+    (sa, ina), (sb, inb) = side(a), side(b)
+    inside = ina & inb
+    return int(np.sum(inside & (sa != sb))), int(inside.sum())
+
+
+def _recording(start, moves: list):
+    """``CoarsePath.start`` ``start``, appending (last equilibrium, start) to ``moves``."""
+
+    def recorded(path, stage, x):
         out = start(path, stage, x)
-        touched.append(_touches(x, out))
+        moves.append((x, out))
         return out
 
-    return counted
+    return recorded
+
+
+def _paths(moves: list, cutoff: float) -> str:
+    """The chords that touch, and the side flips at contacts, over the pairs ``moves``."""
+    flips = [side_flips(a, b, cutoff) for a, b in moves]
+    return (f"{sum(_touches(a, b) for a, b in moves)}, {sum(f for f, _ in flips)} of "
+            f"{sum(c for _, c in flips)}")  # fmt: skip
 
 
 def uncrossed_start(path, stage: int, x: np.ndarray) -> np.ndarray:
@@ -117,7 +148,8 @@ def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pai
     print(f"== N = {n}, d = {wire.hard_core:g}, default schedule, curved steps: plain against "
           f"coarsen = {coarsen} ==")  # fmt: skip
     print("  seed | ramp | iterations | per contact stage | CPU s | converged | the coarse ramp "
-          "| chords touched: to the next equilibrium, to the start")  # fmt: skip
+          "| from each equilibrium to the next, to the start: chords that touch, side flips of "
+          "the pairs within 3d in both")  # fmt: skip
     runs = [("plain", 1, True, False)] if plain else []
     runs.append((f"coarsen {coarsen}", coarsen, True, False))
     if pairs:  # the baseline: the coarse wire's ε per pair (the twenty-eighth stop's)
@@ -128,8 +160,8 @@ def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pai
     for seed in seeds:
         for name, m, per_length, cut_starts in runs:
             protocol_coarse.CONTACT_PER_LENGTH = per_length
-            starts: list[bool] = []
-            protocol_coarse.CoarsePath.start = _counting(
+            starts: list[tuple] = []
+            protocol_coarse.CoarsePath.start = _recording(
                 uncrossed_start if cut_starts else saved[1], starts
             )
             try:
@@ -145,10 +177,11 @@ def ramps(n: int, coarsen: int = 10, seeds=(0,), hard_core=None, plain=True, pai
                 f"moved {r.coarse.moved}, coarse {r.coarse.from_coarse}, cut "
                 f"{len(r.stages) - r.coarse.moved - r.coarse.from_coarse}")  # fmt: skip
             xs = [r.initial] + [s.positions for s in r.stages]
-            chords = sum(_touches(a, b) for a, b in itertools.pairwise(xs))
+            to_start = _paths(starts, 3 * wire.hard_core) if starts else "-"
             print(f"  {seed} | {name} | {sum(its)} | {np.mean(contact):.1f} ({len(contact)}) | "
                   f"{t:.1f} | {sum(s.result.converged for s in r.stages)}/{len(r.stages)} | "
-                  f"{c} | {chords}, {sum(starts) if starts else '-'}", flush=True)  # fmt: skip
+                  f"{c} | {_paths(list(itertools.pairwise(xs)), 3 * wire.hard_core)} | "
+                  f"{to_start}", flush=True)  # fmt: skip
 
 
 def main(argv):
