@@ -132,8 +132,7 @@ def uncrossed_start(path, stage: int, x: np.ndarray) -> np.ndarray:
     """``CoarsePath.start`` that keeps the hard core on the way to the start: the moved start,
     else the coarse curve, where the straight path from ``x`` to it touches nothing; else the
     moved start cut halfway to its first touch (as the stage noise is cut)."""
-    now = protocol_coarse.prolong(path._coarse[stage + 1], path.coarsen)
-    moved = x + (now - protocol_coarse.prolong(path._coarse[stage], path.coarsen))
+    moved, now = path.candidates(stage, x)
     for kind, start in (("moved", moved), ("coarse", now)):
         if max_safe_fraction(x, start - x) >= 1.0:
             path.starts[kind] += 1

@@ -216,6 +216,10 @@ def test_a_start_that_would_cross_is_the_coarse_equilibrium():
     bump[k, 1] = 0.18  # 0.02 below the top strand, which will come down by 0.15
     assert not has_crossings(bump)
     assert has_crossings(bump + prolong(c1, m) - prolong(c0, m))
+    moved, now = path.candidates(0, bump)  # what the start chooses between; counts nothing
+    np.testing.assert_array_equal(moved, bump + prolong(c1, m) - prolong(c0, m))
+    np.testing.assert_array_equal(now, prolong(c1, m))
+    assert path.starts == {"moved": 0, "coarse": 0}
     start = path.start(0, bump)
     np.testing.assert_array_equal(start, prolong(c1, m))
     assert path.starts == {"moved": 0, "coarse": 1}

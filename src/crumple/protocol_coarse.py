@@ -198,10 +198,17 @@ class CoarsePath:
         """The wire's initial state: the coarse ramp's, prolonged."""
         return prolong(self._coarse[0], self.coarsen)
 
-    def start(self, stage: int, x: np.ndarray) -> np.ndarray:
-        """Where stage ``stage`` (0-based) starts, from the last equilibrium ``x``."""
+    def candidates(self, stage: int, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The two starts of stage ``stage`` (0-based) from the last equilibrium ``x``: the
+        moved start x + P(c_k) - P(c_{k-1}) and the coarse curve P(c_k) (k = ``stage`` + 1
+        counts the coarse ramp's states, its initial state first)."""
         now = prolong(self._coarse[stage + 1], self.coarsen)
-        moved = x + (now - prolong(self._coarse[stage], self.coarsen))
+        return x + (now - prolong(self._coarse[stage], self.coarsen)), now
+
+    def start(self, stage: int, x: np.ndarray) -> np.ndarray:
+        """Where stage ``stage`` (0-based) starts, from the last equilibrium ``x``: the moved
+        start, or the coarse curve where that crosses (:meth:`candidates`)."""
+        moved, now = self.candidates(stage, x)
         if np.all(np.isfinite(moved)) and not has_crossings(moved):
             self.starts["moved"] += 1
             return moved
