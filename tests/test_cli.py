@@ -334,6 +334,33 @@ def test_run_echoes_every_parameter_and_warns_on_identical_replicas(capsys, tmp_
     assert json.loads(out)["wire"]["plasticity"] == {"s": 0.3, "theta_p": 0.2}
 
 
+def test_a_plain_ramp_of_many_segments_is_warned_about(capsys, tmp_path, monkeypatch):
+    """From SLOW_PLAIN_RAMP segments, a plain ramp that coarsen = 10 could predict is warned
+    about (it takes hours at N = 10⁵); a coarsened ramp, a wire the coarse ramp cannot predict
+    and a smaller wire are not."""
+    from crumple.cli import run as run_module
+    from crumple.protocol import Ramp
+
+    slow = run_module._slow_plain_ramp
+    n = run_module.SLOW_PLAIN_RAMP
+    big = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n)
+    assert "coarsen = 10" in slow(big, Ramp()) and "2000 segments" in slow(big, Ramp())
+    assert slow(big, Ramp(coarsen=10)) is None
+    assert slow(big, Ramp(method="powell")) is None
+    assert slow(big, Ramp(stage_noise=1e-3)) is None  # coarsen needs stage_noise = 0
+    per_node = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n,
+                                   confinement="per-node")  # fmt: skip
+    assert slow(per_node, Ramp()) is None
+    small = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n - 10)
+    assert slow(small, Ramp()) is None
+    monkeypatch.setattr(run_module, "SLOW_PLAIN_RAMP", 30)  # the command prints it
+    for extra, warned in (((), True), (("--coarsen", 10), False)):
+        code, _, err = run_cli(capsys, "run", "--out", tmp_path / f"o{warned}", "--n-segments", 30,
+                               "--lambdas", "1,10", "--workers", 1, *extra)  # fmt: skip
+        assert code == 0, err
+        assert ("warning: a plain ramp of 30 segments" in err) is warned
+
+
 @pytest.mark.parametrize("flag", ["--curved-steps", "--no-curved-steps"])
 def test_run_curved_steps_flag_reaches_the_stored_ramp(capsys, tmp_path, flag):
     code, out, err = run_cli(capsys, "run", "--out", tmp_path / "o", "--n-segments", 20,

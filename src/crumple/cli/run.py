@@ -409,6 +409,34 @@ def _warn(msg: str) -> None:
     print(f"crumple: warning: {msg}", file=sys.stderr)
 
 
+#: From this many segments a plain Newton ramp that ``coarsen = 10`` could predict is warned
+#: about: the plain default ramp took 23 min of CPU at N = 2 × 10⁴, more than an hour at
+#: 5 × 10⁴ and more than 3.8 h at 10⁵; predicted by the wire with N/10 segments, 18–22 min at
+#: 10⁵ (docs/performance.md).
+SLOW_PLAIN_RAMP = 20_000
+
+
+def _slow_plain_ramp(wire, ramp) -> str | None:
+    """The warning for a plain ramp that ``coarsen = 10`` would predict, at
+    :data:`SLOW_PLAIN_RAMP` segments or more (None: no warning)."""
+    from ..protocol_coarse import check_coarsen
+
+    if ramp.coarsen > 1 or ramp.method != "newton" or wire.n_segments < SLOW_PLAIN_RAMP:
+        return None
+    if ramp.stage_noise > 0:
+        return None
+    try:
+        check_coarsen(wire, 10)
+    except ValueError:
+        return None
+    return (
+        f"a plain ramp of {wire.n_segments} segments takes hours on one core (N = 10⁵: more "
+        "than 3.8 h); `coarsen = 10` in [ramp] (or --coarsen 10) starts each stage where the "
+        f"same wire with {wire.n_segments // 10} segments moved, 18–22 min at N = 10⁵ "
+        '(docs/model.md, "The ramp predicted by a coarser wire"; examples/huge.toml)'
+    )
+
+
 def cmd_run(args) -> int:
     cfg = load_toml(args.config, _TABLES) if args.config else {}
     if protocol_kind(args, cfg) == "injection":
@@ -438,6 +466,9 @@ def cmd_run(args) -> int:
             "nearly the same path, whatever their initial noise (docs/model.md); for an "
             "ensemble give the wire imperfections, e.g. --rest-angle-sd 0.01"
         )
+    slow = _slow_plain_ramp(wire, ramp)
+    if slow is not None:
+        _warn(slow)
     out.mkdir(parents=True, exist_ok=True)
     prog = Progress(args.quiet, n_rep, len(ramp.lambdas), ftol=ramp.ftol, maxiter=ramp.maxiter)
     done: dict = {}
