@@ -217,7 +217,7 @@ def test_a_start_that_would_cross_is_the_coarse_equilibrium():
     assert not has_crossings(bump)
     assert has_crossings(bump + prolong(c1, m) - prolong(c0, m))
     moved, now = path.candidates(0, bump)  # what the start chooses between; counts nothing
-    np.testing.assert_array_equal(moved, bump + prolong(c1, m) - prolong(c0, m))
+    np.testing.assert_array_equal(moved, bump + (prolong(c1, m) - prolong(c0, m)))
     np.testing.assert_array_equal(now, prolong(c1, m))
     assert path.starts == {"moved": 0, "coarse": 0}
     start = path.start(0, bump)

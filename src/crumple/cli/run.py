@@ -409,32 +409,38 @@ def _warn(msg: str) -> None:
     print(f"crumple: warning: {msg}", file=sys.stderr)
 
 
-#: From this many segments a plain Newton ramp that ``coarsen = 10`` could predict is warned
-#: about: the plain default ramp took 23 min of CPU at N = 2 × 10⁴, more than an hour at
-#: 5 × 10⁴ and more than 3.8 h at 10⁵; predicted by the wire with N/10 segments, 18–22 min at
-#: 10⁵ (docs/performance.md).
+#: From this many segments a plain Newton ramp that a coarser wire could predict is warned
+#: about: the default schedule took 23 min of CPU at N = 2 × 10⁴ (an older engine, a slower
+#: machine), more than an hour at 5 × 10⁴ and more than 3.8 h at 10⁵; predicted by the wire
+#: with N/10 segments, 16–22 min at 10⁵ (docs/performance.md).
 SLOW_PLAIN_RAMP = 20_000
 
 
 def _slow_plain_ramp(wire, ramp) -> str | None:
-    """The warning for a plain ramp that ``coarsen = 10`` would predict, at
-    :data:`SLOW_PLAIN_RAMP` segments or more (None: no warning)."""
+    """The warning for a plain ramp of :data:`SLOW_PLAIN_RAMP` segments or more that a
+    coarser wire could predict (None: no warning). It names the largest factor of 10, 5, 4, 2
+    that divides N and passes :func:`crumple.protocol_coarse.check_coarsen`."""
     from ..protocol_coarse import check_coarsen
 
     if ramp.coarsen > 1 or ramp.method != "newton" or wire.n_segments < SLOW_PLAIN_RAMP:
         return None
-    if ramp.stage_noise > 0:
+    if ramp.stage_noise > 0:  # coarsen needs stage_noise = 0
         return None
-    try:
-        check_coarsen(wire, 10)
-    except ValueError:
-        return None
-    return (
-        f"a plain ramp of {wire.n_segments} segments takes hours on one core (N = 10⁵: more "
-        "than 3.8 h); `coarsen = 10` in [ramp] (or --coarsen 10) starts each stage where the "
-        f"same wire with {wire.n_segments // 10} segments moved, 18–22 min at N = 10⁵ "
-        '(docs/model.md, "The ramp predicted by a coarser wire"; examples/huge.toml)'
-    )
+    for m in (10, 5, 4, 2):
+        try:
+            check_coarsen(wire, m)
+        except ValueError:
+            continue
+        return (
+            f"a plain ramp of {wire.n_segments} segments can take hours on one core (the "
+            "default schedule, λ up to 2000: 23 min at N = 2 × 10⁴ on an older engine, more "
+            f"than 3.8 h at N = 10⁵); `coarsen = {m}` in [ramp] (or --coarsen {m}) starts each "
+            "stage from the last equilibrium moved as the same wire with "
+            f"{wire.n_segments // m} segments moved (16–22 min at N = 10⁵ with coarsen = 10; "
+            "a stage that snaps through then takes the coarse wire's branch: docs/model.md, "
+            '"The ramp predicted by a coarser wire"; examples/huge.toml)'
+        )
+    return None
 
 
 def cmd_run(args) -> int:
