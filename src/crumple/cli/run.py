@@ -410,10 +410,10 @@ def _warn(msg: str) -> None:
 
 
 #: From this many segments a plain Newton ramp that a coarser wire could predict is warned
-#: about: the default schedule took 23 min of CPU at N = 2 × 10⁴ (an older engine, a slower
-#: machine), more than an hour at 5 × 10⁴ and more than 3.8 h at 10⁵; predicted by the wire
-#: with N/10 segments, 16–22 min at 10⁵ (docs/performance.md).
-SLOW_PLAIN_RAMP = 20_000
+#: about. The default schedule with curved steps took 6 min of CPU at N = 2 × 10⁴, more than
+#: half an hour at 5 × 10⁴, and more than 3.8 h at 10⁵ (older engines); predicted by the wire
+#: with N/10 segments, 16–22 min at 10⁵ (docs/performance.md, the scaling table).
+SLOW_PLAIN_RAMP = 50_000
 
 
 def _slow_plain_ramp(wire, ramp) -> str | None:
@@ -432,9 +432,9 @@ def _slow_plain_ramp(wire, ramp) -> str | None:
         except ValueError:
             continue
         return (
-            f"a plain ramp of {wire.n_segments} segments can take hours on one core (the "
-            "default schedule, λ up to 2000: 23 min at N = 2 × 10⁴ on an older engine, more "
-            f"than 3.8 h at N = 10⁵); `coarsen = {m}` in [ramp] (or --coarsen {m}) starts each "
+            f"a plain ramp of {wire.n_segments} segments is slow on one core (the default "
+            "schedule, λ up to 2000: more than half an hour at N = 5 × 10⁴, more than 3.8 h at N = 10⁵); "
+            f"`coarsen = {m}` in [ramp] (or --coarsen {m}) starts each "
             "stage from the last equilibrium moved as the same wire with "
             f"{wire.n_segments // m} segments moved (16–22 min at N = 10⁵ with coarsen = 10; "
             "a stage that snaps through then takes the coarse wire's branch: docs/model.md, "
