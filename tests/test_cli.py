@@ -335,9 +335,10 @@ def test_run_echoes_every_parameter_and_warns_on_identical_replicas(capsys, tmp_
 
 
 def test_a_plain_ramp_of_many_segments_is_warned_about(capsys, tmp_path, monkeypatch):
-    """From SLOW_PLAIN_RAMP segments, a plain ramp that coarsen = 10 could predict is warned
-    about (it takes hours at N = 10⁵); a coarsened ramp, a wire the coarse ramp cannot predict
-    and a smaller wire are not."""
+    """From SLOW_PLAIN_RAMP segments, a plain ramp that a coarser wire could predict is warned
+    about (the default schedule takes more than half an hour at N = 5 × 10⁴), naming the
+    largest of 10, 5, 4, 2 that divides N; a coarsened ramp, a wire no coarser wire can
+    predict and a smaller wire are not."""
     from crumple.cli import run as run_module
     from crumple.protocol import Ramp
 

@@ -433,9 +433,9 @@ def _slow_plain_ramp(wire, ramp) -> str | None:
             continue
         return (
             f"a plain ramp of {wire.n_segments} segments is slow on one core (the default "
-            "schedule, λ up to 2000: more than half an hour at N = 5 × 10⁴, more than 3.8 h at N = 10⁵); "
-            f"`coarsen = {m}` in [ramp] (or --coarsen {m}) starts each "
-            "stage from the last equilibrium moved as the same wire with "
+            "schedule, λ up to 2000: more than half an hour at N = 5 × 10⁴, more than 3.8 h "
+            f"at N = 10⁵); `coarsen = {m}` in [ramp] (or --coarsen {m}) starts each stage "
+            "from the last equilibrium moved as the same wire with "
             f"{wire.n_segments // m} segments moved (16–22 min at N = 10⁵ with coarsen = 10; "
             "a stage that snaps through then takes the coarse wire's branch: docs/model.md, "
             '"The ramp predicted by a coarser wire"; examples/huge.toml)'
