@@ -339,11 +339,11 @@ def test_a_plain_ramp_of_many_segments_is_warned_about(capsys, tmp_path, monkeyp
     about (the default schedule takes more than half an hour at N = 5 × 10⁴), naming the
     largest of 10, 5, 4, 2 that divides N; a coarsened ramp, a wire no coarser wire can
     predict and a smaller wire are not."""
-    from crumple.cli import run as run_module
+    from crumple.cli import advice
     from crumple.protocol import Ramp
 
-    slow = run_module._slow_plain_ramp
-    n = run_module.SLOW_PLAIN_RAMP
+    slow = advice.slow_plain_ramp
+    n = advice.SLOW_PLAIN_RAMP
     big = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n)
     assert "coarsen = 10" in slow(big, Ramp()) and f"{n // 10} segments moved" in slow(big, Ramp())
     odd = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n + 5)  # 5 divides it
@@ -358,7 +358,7 @@ def test_a_plain_ramp_of_many_segments_is_warned_about(capsys, tmp_path, monkeyp
     assert slow(per_node, Ramp()) is None
     small = Wire.from_continuum(bending=0.05, stretching=5000.0, n_segments=n - 10)
     assert slow(small, Ramp()) is None
-    monkeypatch.setattr(run_module, "SLOW_PLAIN_RAMP", 30)  # the command prints it
+    monkeypatch.setattr(advice, "SLOW_PLAIN_RAMP", 30)  # the command prints it
     for extra, warned in (((), True), (("--coarsen", 10), False)):
         code, _, err = run_cli(capsys, "run", "--out", tmp_path / f"o{warned}", "--n-segments", 30,
                                "--lambdas", "1,10", "--workers", 1, *extra)  # fmt: skip

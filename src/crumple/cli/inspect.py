@@ -10,14 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .advice import warn
 from .inputs import CLIError, add_model_flags, floats, plasticity, read_positions
 from .results import pick_stage, read_results
 
 __all__ = ["cmd_energy", "cmd_export", "cmd_measure", "register"]
-
-
-def _warn(msg: str) -> None:
-    print(f"crumple: warning: {msg}", file=sys.stderr)
 
 
 # --------------------------------------------------------------------------------------------
@@ -70,7 +67,7 @@ def cmd_energy(args) -> int:
     out["length"] = wire.length
     print(json.dumps(out, indent=2, allow_nan=False))
     if crossings:
-        _warn(
+        warn(
             f"the wire crosses itself {crossings} time(s); the hard core cannot see a "
             "crossing, so its energy is not meaningful"
         )
@@ -116,7 +113,7 @@ def cmd_measure(args) -> int:
         # segments i and i + 2 are one segment apart along the wire: with a distance that
         # large every straight stretch counts as contacts with itself
         how = "the default" if args.contact_distance is None else "--contact-distance"
-        _warn(
+        warn(
             f"the contact distance {dist:g} ({how}) is not below the shortest segment "
             f"{shortest:.3g}, so the wire's own neighbouring segments count as contacts; pass "
             "--contact-distance below the segment length (docs/observables.md)"
@@ -178,7 +175,7 @@ def cmd_export(args) -> int:
     rest = None if rest is None or np.isnan(rest[r]).all() else rest[r]
     rest_file = rest_path(args.output or "FILE") if rest is not None else None
     if rest is not None and not args.output:
-        _warn(
+        warn(
             f"{args.file} is an imperfect wire: its rest angles [rad], which its bending "
             "energy needs, go to a file beside the positions; export with -o FILE to get them"
         )

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .advice import advice, warn
 from .inputs import CLIError, add_model_flags, floats, load_toml, positive_int
 from .progress import Progress
 from .signals import Terminated, _on_sigterm, signal_cause
@@ -405,44 +406,6 @@ def publish(out: Path, results, *, seed, fig, attrs=None, tag: str = "") -> tupl
 # --------------------------------------------------------------------------------------------
 
 
-def _warn(msg: str) -> None:
-    print(f"crumple: warning: {msg}", file=sys.stderr)
-
-
-#: From this many segments a plain Newton ramp that a coarser wire could predict is warned
-#: about. The default schedule with curved steps took 6 min of CPU at N = 2 × 10⁴, more than
-#: half an hour at 5 × 10⁴, and more than 3.8 h at 10⁵ (older engines); predicted by the wire
-#: with N/10 segments, 16–22 min at 10⁵ (docs/performance.md, the scaling table).
-SLOW_PLAIN_RAMP = 50_000
-
-
-def _slow_plain_ramp(wire, ramp) -> str | None:
-    """The warning for a plain ramp of :data:`SLOW_PLAIN_RAMP` segments or more that a
-    coarser wire could predict (None: no warning). It names the largest factor of 10, 5, 4, 2
-    that divides N and passes :func:`crumple.protocol_coarse.check_coarsen`."""
-    from ..protocol_coarse import check_coarsen
-
-    if ramp.coarsen > 1 or ramp.method != "newton" or wire.n_segments < SLOW_PLAIN_RAMP:
-        return None
-    if ramp.stage_noise > 0:  # coarsen needs stage_noise = 0
-        return None
-    for m in (10, 5, 4, 2):
-        try:
-            check_coarsen(wire, m)
-        except ValueError:
-            continue
-        return (
-            f"a plain ramp of {wire.n_segments} segments is slow on one core (the default "
-            "schedule, λ up to 2000: more than half an hour at N = 5 × 10⁴, more than 3.8 h "
-            f"at N = 10⁵); `coarsen = {m}` in [ramp] (or --coarsen {m}) starts each stage "
-            "from the last equilibrium moved as the same wire with "
-            f"{wire.n_segments // m} segments moved (16–22 min at N = 10⁵ with coarsen = 10; "
-            "a stage that snaps through then takes the coarse wire's branch: docs/model.md, "
-            '"The ramp predicted by a coarser wire"; examples/huge.toml)'
-        )
-    return None
-
-
 def cmd_run(args) -> int:
     cfg = load_toml(args.config, _TABLES) if args.config else {}
     if protocol_kind(args, cfg) == "injection":
@@ -466,15 +429,8 @@ def cmd_run(args) -> int:
         raise CLIError(f"--out {out} exists and is not a directory")
     if not args.quiet:
         print(describe(wire, ramp, run, workers), file=sys.stderr)
-    if n_rep > 1 and wire.rest_angle_sd == 0 and ramp.stage_noise == 0:
-        _warn(
-            f"{n_rep} replicas of a perfect wire (rest_angle_sd = 0, stage_noise = 0) follow "
-            "nearly the same path, whatever their initial noise (docs/model.md); for an "
-            "ensemble give the wire imperfections, e.g. --rest-angle-sd 0.01"
-        )
-    slow = _slow_plain_ramp(wire, ramp)
-    if slow is not None:
-        _warn(slow)
+    for msg in advice(wire, ramp, n_rep):
+        warn(msg)
     out.mkdir(parents=True, exist_ok=True)
     prog = Progress(args.quiet, n_rep, len(ramp.lambdas), ftol=ramp.ftol, maxiter=ramp.maxiter)
     done: dict = {}
