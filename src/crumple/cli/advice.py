@@ -34,7 +34,8 @@ def identical_replicas(wire, ramp, n_rep: int) -> str | None:
 #: From this many segments a plain Newton ramp that a coarser wire could predict is warned
 #: about. The default schedule with curved steps took 6 min of CPU at N = 2 × 10⁴, more than
 #: half an hour at 5 × 10⁴, and more than 3.8 h at 10⁵ (older engines); predicted by the wire
-#: with N/10 segments, 16–22 min at 10⁵ (docs/performance.md, the scaling table).
+#: with N/10 segments, 4.6 min at 5 × 10⁴ and 16–22 min at 10⁵ (docs/performance.md, the
+#: scaling table).
 SLOW_PLAIN_RAMP = 50_000
 
 
@@ -58,7 +59,8 @@ def slow_plain_ramp(wire, ramp) -> str | None:
             "schedule, λ up to 2000: more than half an hour at N = 5 × 10⁴, more than 3.8 h "
             f"at N = 10⁵); `coarsen = {m}` in [ramp] (or --coarsen {m}) starts each stage "
             "from the last equilibrium moved as the same wire with "
-            f"{wire.n_segments // m} segments moved (16–22 min at N = 10⁵ with coarsen = 10; "
+            f"{wire.n_segments // m} segments moved (with coarsen = 10: 4.6 min at N = 5 × 10⁴, "
+            "16–22 min at N = 10⁵; "
             "a stage that snaps through then takes the coarse wire's branch: docs/model.md, "
             '"The ramp predicted by a coarser wire"; examples/huge.toml)'
         )
