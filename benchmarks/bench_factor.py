@@ -16,14 +16,16 @@ schedule with curved steps, seed 0: up to ~6 min); other N need ``state=`` the p
 ``bench_scale.py scale N … save=DIR`` run (``DIR/N{N}_stage44.npy``).
 
 Each solver is timed (CPU, one thread: ``time.process_time`` with OpenBLAS and MKL limited to
-one thread; the median of ``repeat`` runs) for what a Newton iteration does with it: the
-analysis of a pattern (once per neighbour list), the numeric factorisation of a new matrix
-in that pattern, and a solve; the residual |Ax - b| / |b| says whether the solve is usable.
-What the step needs besides a solve is listed: the inertia (the stability test and the
-fallback's trial factorisations count negative pivots) and the direction Lᵀ⁻¹e_k of the
-first bad pivot (the fallback's negative curvature). pyamg is iterative: its "analysis" is
-the smoothed-aggregation hierarchy, its "factorisation" nothing, its solve preconditioned CG
-to a relative residual of 10⁻¹⁰. Results: docs/performance.md, "Sparse solvers from wheels".
+one thread; the median of ``repeat`` timings, each of as many calls as fill 20 ms) for what a
+Newton iteration does with it: the analysis of a pattern (once per neighbour list), the
+numeric factorisation of a new matrix in that pattern, and a solve; the residual
+|Ax - b| / |b| says whether the solve is usable. What the step needs besides a solve is
+listed: the inertia (the stability test and the fallback's trial factorisations count
+negative pivots) and the direction Lᵀ⁻¹e_k of the first bad pivot (the fallback's negative
+curvature). "crumple, AMD order" is crumple's factorisation in qdldl's order: the order's
+share of a difference, apart from the code's. pyamg is iterative: its "analysis" is the
+smoothed-aggregation hierarchy, its "factorisation" nothing, its solve preconditioned CG to a
+relative residual of 10⁻¹⁰. Results: docs/performance.md, "Sparse solvers from wheels".
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from threadpoolctl import threadpool_limits
 
 from crumple import relax
 from crumple.energy import WireEnergy
-from crumple.linalg import LDLT
+from crumple.linalg import LDLT, _row_patterns, _Symbolic
 from crumple.minimize_modes import _gauge_pin
 from crumple.protocol import Ramp, run_ramp
 from crumple.relax import _symmetry_modes
@@ -72,13 +74,18 @@ def newton_matrix(n: int, state: str | None):
     return (a + sp.diags(pin)).tocsc() if pin is not None else a, x
 
 
-def _cpu(fn, repeat):
-    """(result of the last call, median CPU seconds)."""
+def _cpu(fn, repeat, least=0.02):
+    """(result of the last call, CPU seconds per call): the median of ``repeat`` timings, each
+    of enough calls to take ``least`` seconds (a factorisation at N = 100 takes ~40 µs)."""
+    t0 = time.process_time()
+    out = fn()
+    calls = max(1, int(least / max(time.process_time() - t0, 1e-9)))
     times = []
     for _ in range(repeat):
         t0 = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t0)
+        for _ in range(calls):
+            out = fn()
+        times.append((time.process_time() - t0) / calls)
     return out, float(np.median(times))
 
 
@@ -101,14 +108,38 @@ def _analysed(a, pts):
     return ldl
 
 
+def crumple_in_amd_order(a, x, b, repeat):
+    """crumple.linalg.LDLT given qdldl's AMD order as its candidate (kept where it fills least,
+    as it did at every N measured): what the order does, apart from the factorisation's code.
+    Needs qdldl (its ``factors()`` gives the order)."""
+    import qdldl
+
+    order = np.asarray(qdldl.Solver(sp.triu(a, format="csc"), upper=True).factors()[2])
+
+    def analysed():
+        ldl = LDLT()
+        sym = _Symbolic(a, order)
+        sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(sym.n, sym.ap, sym.ai, sym.parent,
+                                                           sym.lp)  # fmt: skip
+        ldl._sym = sym
+        return ldl
+
+    ldl = analysed()
+    f, t_fac = _cpu(lambda: ldl.factorize(a), repeat)
+    s, t_sol = _cpu(lambda: f.solve(b), repeat)
+    chosen = "AMD's" if np.array_equal(ldl._sym.perm, order) else "not AMD's"
+    return dict(analysis=None, factor=t_fac, solve=t_sol, x=s, inertia="yes", direction="yes",
+                note=f"order kept: {chosen}", fill=ldl._sym.l_nnz)  # fmt: skip
+
+
 def qdldl_solver(a, x, b, repeat):
     """qdldl (OSQP's LDLᵀ, AMD order): ``Solver(A)`` analyses and factorises, ``update(A)``
     refactorises in the known pattern. It gives no inertia or pivots to Python."""
     import qdldl
 
-    upper = sp.triu(a, format="csc")
-    f, t_both = _cpu(lambda: qdldl.Solver(upper), repeat)
-    _, t_fac = _cpu(lambda: f.update(upper), repeat)
+    upper = sp.triu(a, format="csc")  # given as the upper triangle: not cut again in the timing
+    f, t_both = _cpu(lambda: qdldl.Solver(upper, upper=True), repeat)
+    _, t_fac = _cpu(lambda: f.update(upper, upper=True), repeat)
     s, t_sol = _cpu(lambda: f.solve(b), repeat)
     return dict(analysis=max(t_both - t_fac, 0.0), factor=t_fac, solve=t_sol, x=s,
                 inertia="no", direction="no")  # fmt: skip
@@ -141,7 +172,9 @@ def cholespy_solver(a, x, b, repeat):
 
 def pardiso_solver(a, x, b, repeat):
     """pypardiso (MKL PARDISO, real symmetric indefinite, mtype -2): phase 11 analyses, 22
-    factorises, 33 solves; the inertia is MKL's iparm(22), iparm(23)."""
+    factorises, 33 solves; the inertia is MKL's iparm(22), iparm(23). Through pypardiso's
+    ``_call_pardiso``, which copies the index arrays to 1-based int32 at every phase (an
+    O(nnz) cost counted against it)."""
     import pypardiso
 
     upper = sp.triu(a, format="csr")
@@ -163,11 +196,13 @@ def pardiso_solver(a, x, b, repeat):
 
 
 def pyamg_solver(a, x, b, repeat):
-    """pyamg: smoothed aggregation (the 2 × 2 blocks of a node together), then CG
-    preconditioned by one V-cycle, to a relative residual of 10⁻¹⁰ (at most 500 iterations)."""
+    """pyamg: smoothed aggregation on the 2 × 2 blocks of the nodes (BSR; otherwise pyamg's
+    defaults), then CG preconditioned by one V-cycle, to a relative residual of 10⁻¹⁰ (at most
+    500 iterations)."""
     import pyamg
 
-    ml, t_an = _cpu(lambda: pyamg.smoothed_aggregation_solver(a.tocsr(), symmetry="symmetric"),
+    blocks = a.tobsr(blocksize=(2, 2))
+    ml, t_an = _cpu(lambda: pyamg.smoothed_aggregation_solver(blocks, symmetry="symmetric"),
                     repeat)  # fmt: skip
     its = []
 
@@ -183,20 +218,29 @@ def pyamg_solver(a, x, b, repeat):
 
 
 def scipy_splu(a, x, b, repeat):
-    """SciPy's SuperLU (COLAMD): no symbolic reuse, the landed engine's solver."""
-    f, t_fac = _cpu(lambda: spla.splu(a, permc_spec="COLAMD"), repeat)
+    """SciPy's SuperLU as the landed engine called it (``benchmarks/legacy_newton.py``: MMD on
+    AᵀA + A, symmetric mode, no off-diagonal pivoting, so that U's diagonal holds the pivots of
+    an LDLᵀ and their signs the inertia); no symbolic reuse."""
+
+    def factor():
+        return spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                         options={"SymmetricMode": True})  # fmt: skip
+
+    f, t_fac = _cpu(factor, repeat)
     s, t_sol = _cpu(lambda: f.solve(b), repeat)
-    return dict(analysis=None, factor=t_fac, solve=t_sol, x=s, inertia="no", direction="no",
-                note="analysis + factorisation together")  # fmt: skip
+    neg = int((f.U.diagonal() < 0).sum())
+    return dict(analysis=None, factor=t_fac, solve=t_sol, x=s, inertia=f"yes ({neg} negative)",
+                direction="no", note="analysis + factorisation together")  # fmt: skip
 
 
 SOLVERS = {
     "crumple LDLT": crumple_ldlt,
+    "crumple, AMD order": crumple_in_amd_order,
     "qdldl": qdldl_solver,
     "cholespy": cholespy_solver,
     "pypardiso": pardiso_solver,
     "pyamg (SA + CG)": pyamg_solver,
-    "scipy splu": scipy_splu,
+    "scipy splu (landed)": scipy_splu,
 }
 
 
@@ -209,21 +253,21 @@ def bench(n: int, state: str | None, repeat: int) -> None:
     b = np.random.default_rng(0).standard_normal(a.shape[0])
     print(f"== N = {n}: {a.shape[0]} unknowns, {a.nnz} nonzeros (both triangles), λ = {LAST:g}, "
           f"ms CPU (one thread, median of {repeat}) ==")  # fmt: skip
-    print(f"  {'solver':18s} {'analysis':>9s} {'factor':>9s} {'solve':>9s} {'residual':>9s}  "
+    print(f"  {'solver':20s} {'analysis':>9s} {'factor':>9s} {'solve':>9s} {'residual':>9s}  "
           "inertia | bad pivot's direction | note")  # fmt: skip
     for name, fn in SOLVERS.items():
         try:
             with threadpool_limits(limits=1):
                 r = fn(a, x, b, repeat)
         except ImportError:
-            print(f"  {name:18s} not installed")
+            print(f"  {name:20s} not installed")
             continue
         except Exception as exc:  # a solver that fails on this matrix says why
-            print(f"  {name:18s} failed: {type(exc).__name__}: {exc}")
+            print(f"  {name:20s} failed: {type(exc).__name__}: {exc}")
             continue
         res = np.linalg.norm(a @ r["x"] - b) / np.linalg.norm(b)
         extra = "; ".join(str(r[k]) for k in ("note", "fill") if k in r)
-        print(f"  {name:18s} {_ms(r['analysis'])} {_ms(r['factor'])} {_ms(r['solve'])} "
+        print(f"  {name:20s} {_ms(r['analysis'])} {_ms(r['factor'])} {_ms(r['solve'])} "
               f"{res:9.1e}  {r['inertia']} | {r['direction']} | {extra}", flush=True)  # fmt: skip
 
 
