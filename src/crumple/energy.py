@@ -277,10 +277,10 @@ class WireEnergy:
         if self._pattern is not None and self._pattern[0] is ks:  # straight into the pattern
             _, _, indptr, indices, where = self._pattern
             w = self.wire
-            data = _hessian_values(
-                where, indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles, w.k_s,
-                w.rest_length, self.lam, self.weights, ks, js, w.hard_core, w.hard_core_energy,
-                project_contacts, project_bending, self._radius,
+            data = _hessian_values(  # where unsigned: see crumple.linalg._Symbolic.unsigned
+                where.view(np.uint64), indices.shape[0], x, w.k_b, self._s, self._tp,
+                self.rest_angles, w.k_s, w.rest_length, self.lam, self.weights, ks, js,
+                w.hard_core, w.hard_core_energy, project_contacts, project_bending, self._radius,
             )  # fmt: skip
             return CSC(data, indices, indptr)
         rows, cols, vals = self._triplets(x, project_contacts, project_bending)

@@ -99,8 +99,9 @@ def modified(f: Factorization, index, value, sigma, chosen) -> Factorization | N
     pinv = inverse_order(sym)
     lx, d = f._lx.copy(), f._d.copy()
     w = np.zeros(sym.n)
+    u = sym.unsigned  # the kernel's index arrays unsigned (crumple.linalg._Symbolic.unsigned)
     for i in np.flatnonzero(chosen):
-        if not _modify(sym.lp, sym.ai_l, lx, d, sym.parent, pinv, index[i], value[i],
+        if not _modify(u["lp"], u["li"], lx, d, sym.parent, pinv, index[i], value[i],
                        float(sigma[i]), w, CANCELLATION):  # fmt: skip
             return None
     out = Factorization(sym, lx, d, 0, 0)
