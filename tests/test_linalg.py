@@ -328,6 +328,16 @@ def test_spring_solve_stops_a_step_at_a_stiff_spring_and_ignores_far_ones():
     assert s[1] == 1.0
 
 
+@pytest.mark.parametrize("bad", [-1, 2])
+def test_spring_rows_outside_the_unknowns_are_refused(bad):
+    """The kernels read the springs' rows as unsigned indices (no wrap-around, no bounds check):
+    a row naming no unknown is refused before them, not read out of bounds."""
+    f = LDLT().factorize(sp.csc_matrix(np.eye(2)))
+    with pytest.raises(ValueError, match="index the 2 unknowns"):
+        f.solve_springs(np.ones(2), np.array([[0], [bad]]), np.array([[-1.0], [-1.0]]),
+                        np.array([-0.25, -0.25]), np.full(2, 1e9))  # fmt: skip
+
+
 def test_spring_solve_out_of_rounds_still_stops_at_the_first_contact():
     """Identity model, p0 = (1, 1), springs at x_0 = 0.25 and x_1 = 0.5: with one round the
     active set is not found (the second spring is still entered), and the step returned holds
