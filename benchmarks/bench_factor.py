@@ -47,7 +47,7 @@ from threadpoolctl import threadpool_limits
 
 from crumple import relax
 from crumple.energy import WireEnergy
-from crumple.linalg import LDLT, _row_patterns, _Symbolic
+from crumple.linalg import LDLT
 from crumple.minimize_modes import _gauge_pin
 from crumple.protocol import Ramp, run_ramp
 from crumple.relax import _symmetry_modes
@@ -108,28 +108,31 @@ def _analysed(a, pts):
     return ldl
 
 
+class _GivenOrder(LDLT):
+    """crumple's LDLᵀ with a given fill-reducing order as the candidate of its analysis (which
+    keeps it where it fills least, as against RCM and the natural order)."""
+
+    def __init__(self, order):
+        super().__init__()
+        self._order = order
+
+    def _candidate(self, a):
+        return self._order
+
+
 def crumple_in_amd_order(a, x, b, repeat):
-    """crumple.linalg.LDLT given qdldl's AMD order as its candidate (kept where it fills least,
-    as it did at every N measured): what the order does, apart from the factorisation's code.
-    Needs qdldl (its ``factors()`` gives the order)."""
+    """crumple.linalg.LDLT given qdldl's AMD order as its candidate: what the order does, apart
+    from the factorisation's code. Needs qdldl (its ``factors()`` gives the order)."""
     import qdldl
 
     order = np.asarray(qdldl.Solver(sp.triu(a, format="csc"), upper=True).factors()[2])
-
-    def analysed():
-        ldl = LDLT()
-        sym = _Symbolic(a, order)
-        sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(sym.n, sym.ap, sym.ai, sym.parent,
-                                                           sym.lp)  # fmt: skip
-        ldl._sym = sym
-        return ldl
-
-    ldl = analysed()
+    ldl = _GivenOrder(order)
+    sym = ldl.symbolic(a)
     f, t_fac = _cpu(lambda: ldl.factorize(a), repeat)
     s, t_sol = _cpu(lambda: f.solve(b), repeat)
-    chosen = "AMD's" if np.array_equal(ldl._sym.perm, order) else "not AMD's"
+    chosen = "AMD's" if np.array_equal(sym.perm, order) else "not AMD's"
     return dict(analysis=None, factor=t_fac, solve=t_sol, x=s, inertia="yes", direction="yes",
-                note=f"order kept: {chosen}", fill=ldl._sym.l_nnz)  # fmt: skip
+                note=f"order kept: {chosen}", fill=sym.l_nnz)  # fmt: skip
 
 
 def qdldl_solver(a, x, b, repeat):
