@@ -224,7 +224,7 @@ class _Symbolic:
         (``src``, ``perm``, ``ap``, ``ai``, ``rp``, ``rc``, ``rpos``, ``lp``, ``li``: every value
         is non-negative, so the same numbers). Numba checks a signed index for wrap-around at
         every access, an unsigned one not: the factorisation's kernel measured 1.7× faster at
-        N = 100 and 2.5× at N = 1000, the same operations in the same order, so the same bits
+        N = 100 and 1.9× at N = 1000, the same operations in the same order, so the same bits
         (docs/performance.md, "Unsigned indices"). Made once, after the row patterns are set
         (:meth:`LDLT.symbolic` sets them at once)."""
         if self._unsigned is None:
