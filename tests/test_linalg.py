@@ -128,6 +128,76 @@ def test_symbolic_analysis_is_reused_while_the_pattern_holds():
     assert solver.analyses == 2
 
 
+def test_a_new_solver_recalls_a_recent_analysis_of_the_same_pattern_bit_for_bit():
+    """A solver without points takes the analysis another made of the same pattern (a Newton
+    minimisation per stage makes a new solver): the same factor, bit for bit, as analysing
+    anew; a pattern changed in place by its owner after the analysis is not mistaken for it."""
+    import crumple.linalg as la
+
+    rng = np.random.default_rng(11)
+    a = random_symmetric(rng, 40, 0.1, 10.0)
+    la._recent.clear()
+    first = LDLT()
+    f1 = first.factorize(a)
+    second = LDLT()
+    f2 = second.factorize(a.copy())
+    assert f2._sym is f1._sym and second.analyses == 1  # recalled, counted as taken up
+    la._recent.clear()
+    f3 = LDLT().factorize(a.copy())  # analysed anew
+    assert f3._sym is not f1._sym
+    b = np.arange(40.0)
+    assert np.array_equal(f2.solve(b), f3.solve(b)) and np.array_equal(f2._lx, f3._lx)
+    # the owner of the analysed matrix rewrites its pattern in place: the copy kept decides
+    n = 40
+    c = sp.diags([np.ones(n - 1), np.full(n, 4.0), np.ones(n - 1)], [-1, 0, 1]).tocsc()
+    d = sp.diags([[1.0], np.ones(n - 2), np.full(n, 4.0), np.ones(n - 2), [1.0]],
+                 [1 - n, -2, 0, 2, n - 1]).tocsc()
+    assert c.nnz == d.nnz
+    LDLT().factorize(c)
+    c.indptr[:], c.indices[:], c.data[:] = d.indptr, d.indices, d.data  # c is now d
+    f4 = LDLT().factorize(c)
+    la._recent.clear()
+    assert np.array_equal(LDLT().factorize(d).solve(b), f4.solve(b))
+    assert np.allclose(d @ f4.solve(b), b)
+
+
+def test_solvers_with_points_neither_keep_nor_recall_analyses():
+    """A solver with ``points`` may order by them (a nested dissection of where the unknowns
+    are), so its analysis is not a function of the pattern alone: never shared."""
+    import crumple.linalg as la
+
+    rng = np.random.default_rng(12)
+    a = random_symmetric(rng, 20, 0.2, 10.0)
+    la._recent.clear()
+    LDLT(points=lambda: rng.uniform(size=(20, 1))).factorize(a)
+    assert la._recent == []
+    LDLT().factorize(a)
+    assert len(la._recent) == 1
+    solver = LDLT(points=lambda: rng.uniform(size=(20, 1)))
+    assert solver.factorize(a)._sym is not la._recent[0][2]
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 50), nz0=st.integers(0, 6),
+       nz1=st.integers(0, 6))  # fmt: skip
+def test_two_solves_at_once_are_each_solve_bit_for_bit(seed, n, nz0, nz1):
+    """The springs' step solves its new columns two at a time: each the bits of its own solve,
+    for sparse right-hand sides (a spring's row) whose zeros each solve skips on its own."""
+    from crumple.linalg_solve import _solve, _solve_pair
+
+    rng = np.random.default_rng(seed)
+    f = LDLT().factorize(random_symmetric(rng, n, 0.2, 5.0))
+    s, u = f._sym, f._sym.unsigned
+    b0, b1 = np.zeros(n), np.zeros(n)
+    b0[rng.integers(0, n, nz0)] = rng.normal(size=nz0)
+    b1[rng.integers(0, n, nz1)] = rng.normal(size=nz1)
+    out0, out1 = np.full(n, np.nan), np.full(n, np.nan)
+    _solve_pair(s.n, u["lp"], u["li"], f._lx, f._d, u["perm"], b0, b1, out0, out1)
+    for b, out in ((b0, out0), (b1, out1)):
+        alone = _solve(s.n, u["lp"], u["li"], f._lx, f._d, u["perm"], b)
+        assert alone.tobytes() == out.tobytes()  # bits, the signs of zeros included
+
+
 def test_dense_input_is_accepted():
     f = LDLT().factorize(np.array([[2.0, 1.0], [1.0, 2.0]]))
     assert f.positive_definite
