@@ -150,8 +150,9 @@ def test_a_new_solver_recalls_a_recent_analysis_of_the_same_pattern_bit_for_bit(
     # the owner of the analysed matrix rewrites its pattern in place: the copy kept decides
     n = 40
     c = sp.diags([np.ones(n - 1), np.full(n, 4.0), np.ones(n - 1)], [-1, 0, 1]).tocsc()
-    d = sp.diags([[1.0], np.ones(n - 2), np.full(n, 4.0), np.ones(n - 2), [1.0]],
-                 [1 - n, -2, 0, 2, n - 1]).tocsc()
+    d = sp.diags(
+        [[1.0], np.ones(n - 2), np.full(n, 4.0), np.ones(n - 2), [1.0]], [1 - n, -2, 0, 2, n - 1]
+    ).tocsc()
     assert c.nnz == d.nnz
     LDLT().factorize(c)
     c.indptr[:], c.indices[:], c.data[:] = d.indptr, d.indices, d.data  # c is now d

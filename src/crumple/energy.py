@@ -286,7 +286,7 @@ class WireEnergy:
         rows, cols, vals = self._triplets(x, project_contacts, project_bending)
         self._pattern = self._new_pattern(ks, js, rows, cols, x.size)
         _, _, indptr, indices, where = self._pattern
-        return CSC(_scatter_add(where, vals, indices.shape[0]), indices, indptr)
+        return CSC(_scatter_add(_unsigned(where), vals, indices.shape[0]), indices, indptr)
 
     def hessian_action(self, x, v) -> np.ndarray:
         """The exact Hessian times ``v`` (over ``x.ravel()``), in element form: flat (x.size,).
@@ -321,7 +321,8 @@ class WireEnergy:
         entries of pairs that left it staying explicit zeros."""
         if self._pattern is not None:
             indptr, indices = self._pattern[2], self._pattern[3]
-            where = _pattern_where(rows, cols, indptr, indices)
+            where = _pattern_where(_unsigned(rows), _unsigned(cols), _unsigned(indptr),
+                                   _unsigned(indices))  # fmt: skip
             if where.shape[0] == 0 or where[0] >= 0:
                 return (ks, js, indptr, indices, where)
         return (ks, js, *_csc_pattern(rows, cols, ndof))
@@ -395,9 +396,16 @@ def _projection(project_contacts) -> int:
     raise ValueError(f"project_contacts must be False, True or 'caps', got {project_contacts!r}")
 
 
+def _unsigned(index):
+    """An index array (non-negative integers) as an unsigned view of the same memory: Numba
+    checks a signed index for wrap-around at every access, an unsigned one not (the same
+    numbers, so the same results; :attr:`crumple.linalg._Symbolic.unsigned`)."""
+    return index.view(np.dtype(f"u{index.dtype.itemsize}"))
+
+
 def _csc_pattern(rows, cols, ndof):
     """CSC pattern (indptr, indices) of the triplets, and the entry each triplet adds to."""
-    indptr, indices, where = _csc_pattern_kernel(rows, cols, ndof)
+    indptr, indices, where = _csc_pattern_kernel(_unsigned(rows), _unsigned(cols), ndof)
     index = np.int32 if indices.shape[0] < 2**31 - 1 else np.int64
     return indptr.astype(index), indices.astype(index), where
 

@@ -16,13 +16,14 @@ from numba import njit
 @njit(cache=True)
 def _column_order(cols, ndof):
     """The triplets grouped by column, each group in triplet order (a counting sort):
-    column c's triplets are ``order[start[c]:start[c + 1]]``."""
-    start = np.zeros(ndof + 1, dtype=np.int64)
+    column c's triplets are ``order[start[c]:start[c + 1]]`` (unsigned: see
+    :func:`_csc_pattern`)."""
+    start = np.zeros(ndof + 1, dtype=np.uint64)
     for e in range(cols.shape[0]):
         start[cols[e] + 1] += 1
     for c in range(ndof):
         start[c + 1] += start[c]
-    order = np.empty(cols.shape[0], dtype=np.int64)
+    order = np.empty(cols.shape[0], dtype=np.uint64)
     fill = start[:-1].copy()
     for e in range(cols.shape[0]):
         order[fill[cols[e]]] = e
@@ -40,7 +41,7 @@ def _csc_pattern_kernel(rows, cols, ndof):
     t = rows.shape[0]
     start, order = _column_order(cols, ndof)
     slot = np.full(ndof, -1, dtype=np.int64)
-    buf = np.empty(ndof, dtype=np.int64)
+    buf = np.empty(ndof, dtype=np.uint64)
     indptr = np.zeros(ndof + 1, dtype=np.int64)
     indices = np.empty(t, dtype=np.int64)
     where = np.empty(t, dtype=np.int64)
