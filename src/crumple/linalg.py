@@ -171,17 +171,20 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
 
 @njit(cache=True)
 def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp, li, lx, d,
-                     first, stop=False):  # fmt: skip
+                     stop):  # fmt: skip
     """:func:`_factor` of the matrix with entries ``data`` (the upper permuted pattern's
     entry e is ``data[src[e]]``), shift and floor given in the original order (empty: none;
-    an empty floor: no modification), gathered and permuted here."""
+    an empty floor: no modification), gathered and permuted here. Returns (negative,
+    modified, the first modified pivot or -1)."""
     ax = data[src]
     sh = shift[perm] if shift.shape[0] else np.zeros(n)
     modify = floor.shape[0] > 0
     fl = floor[perm] if modify else np.zeros(n)
+    first = np.full(1, -1, dtype=np.int64)
     first_value = np.zeros(1)
-    return _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first, first_value,
-                   stop)  # fmt: skip
+    negative, modified = _factor(n, ap, ai, ax, sh, fl, modify, rp, rc, rpos, lp, li, lx, d, first,
+                                 first_value, stop)  # fmt: skip
+    return negative, modified, first[0]
 
 
 _EMPTY = np.empty(0)
@@ -234,6 +237,8 @@ class _Symbolic:
                                                                    dtype=np.int64).view(np.uint64)
                 for k in names
             }  # fmt: skip
+            u = self._unsigned
+            u["factor"] = (self.n, u["ap"], u["ai"], u["rp"], u["rc"], u["rpos"], u["lp"], u["li"])
         return self._unsigned
 
     def matches(self, a) -> bool:
@@ -470,6 +475,7 @@ class LDLT:
 
     def __init__(self, points=None):
         self._sym: _Symbolic | None = None
+        self._arrays = (None, None)  # the index arrays that ``_sym`` was last matched with
         self._points = points
         self.analyses = 0
         self.factorizations = 0
@@ -481,6 +487,8 @@ class LDLT:
         ``points`` if its pattern is ``a``'s (a deterministic function of the pattern, so the
         same factors bit for bit), else a new one. ``analyses`` counts the patterns taken up,
         recalled or analysed."""
+        if self._sym is not None and a.indptr is self._arrays[0] and a.indices is self._arrays[1]:
+            return self._sym  # the arrays last taken up: the pattern holds (the hot path)
         if self._sym is None or not self._sym.matches(a):
             sym = None if self._points is not None else _recall(a)
             if sym is None:
@@ -492,6 +500,7 @@ class LDLT:
                     _remember(sym)
             self._sym = sym
             self.analyses += 1
+        self._arrays = (a.indptr, a.indices)
         return self._sym
 
     def _candidate(self, a):
@@ -524,20 +533,17 @@ class LDLT:
         elif a.format != "csc":
             a = a.tocsc()
         s = self.symbolic(a)
-        n = s.n
         lx = np.empty(s.l_nnz)
-        d = np.empty(n)
-        first = np.array([-1], dtype=np.int64)
+        d = np.empty(s.n)
         u = s.unsigned
-        neg, mod = _factor_permuted(
+        neg, mod, first = _factor_permuted(
             u["src"], np.ascontiguousarray(a.data, dtype=np.float64), u["perm"],
             _EMPTY if shift is None else np.ascontiguousarray(shift, dtype=np.float64),
             _EMPTY if floor is None else np.ascontiguousarray(floor, dtype=np.float64),
-            n, u["ap"], u["ai"], u["rp"], u["rc"], u["rpos"], u["lp"], u["li"], lx, d, first,
-            bool(trial),
+            *u["factor"], lx, d, bool(trial),
         )  # fmt: skip
         self.factorizations += 1
         f = Factorization(s, lx, d, neg, mod)
-        f.first_modified = int(first[0])
+        f.first_modified = int(first)
         f.complete = not (trial and mod)
         return f
