@@ -136,7 +136,7 @@ class CSC:
     ((2, 2), 4, [3.0, 4.0])
     """
 
-    __slots__ = ("_scipy", "data", "indices", "indptr", "shape")
+    __slots__ = ("_scipy", "_unsigned", "data", "indices", "indptr", "shape")
     format = "csc"
 
     def __init__(self, data, indices, indptr):
@@ -144,6 +144,17 @@ class CSC:
         n = indptr.shape[0] - 1
         self.shape = (n, n)
         self._scipy = None
+        self._unsigned = None
+
+    @property
+    def unsigned(self) -> tuple[np.ndarray, np.ndarray]:
+        """(indptr, indices) as unsigned views of the same memory, for the kernels: Numba
+        checks a signed index for wrap-around at every access, an unsigned one not (the same
+        numbers, so the same results; :attr:`crumple.linalg._Symbolic.unsigned`)."""
+        if self._unsigned is None:
+            p, i = np.ascontiguousarray(self.indptr), np.ascontiguousarray(self.indices)
+            self._unsigned = (p.view(f"u{p.itemsize}"), i.view(f"u{i.itemsize}"))
+        return self._unsigned
 
     @property
     def nnz(self) -> int:
@@ -160,16 +171,16 @@ class CSC:
     def __matmul__(self, v):
         v = np.asarray(v)
         if v.ndim == 1 and v.dtype == np.float64 and v.shape[0] == self.shape[1]:
-            return _csc_matvec(self.indptr, self.indices, self.data, v)
+            return _csc_matvec(*self.unsigned, self.data, v)
         return self.tocsc() @ v
 
     def abs_row_max(self, u) -> float:
         """max_i Σ_j |A_ij| u_j (A symmetric): the largest change of A u's rows by a move u."""
-        return float(_abs_weighted_row_max(self.indptr, self.indices, self.data, u))
+        return float(_abs_weighted_row_max(*self.unsigned, self.data, u))
 
     def diagonal_entry(self, j: int) -> float:
         """A_jj (0 where the pattern does not store it)."""
-        return float(_diagonal_entry(self.indptr, self.indices, self.data, j))
+        return float(_diagonal_entry(*self.unsigned, self.data, j))
 
 
 def dense_csc(a) -> CSC:

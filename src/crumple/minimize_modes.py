@@ -13,8 +13,10 @@ import math
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numba import njit
 
 from .linalg import CSC
+from .linalg_csc import _csc_matvec, _diagonal_entry
 from .minimize_result import _row_norms, max_force
 
 
@@ -51,12 +53,12 @@ def _gauge_pin(h, modes) -> np.ndarray | None:
     hs = h if isinstance(h, CSC) else (h.tocsc() if sp.issparse(h) else sp.csc_matrix(h))
     w = np.asarray(modes, dtype=np.float64).reshape(-1, hs.shape[0])
     if w.shape[0] == 1 and isinstance(hs, CSC):  # the rotation alone: the loop below, unrolled
-        mode = w[0]
-        j = int(np.argmax(np.abs(mode)))
+        mode = np.ascontiguousarray(w[0])
+        j, hjj, hw = _pin_parts(*hs.unsigned, hs.data, mode)
         if not abs(mode[j]) > 0:
             return None
         pin = np.zeros(hs.shape[0])
-        pin[j] = max(abs(hs.diagonal_entry(j)), -2.0 * float(mode @ (hs @ mode)) / mode[j] ** 2)
+        pin[j] = max(abs(hjj), -2.0 * float(mode @ hw) / mode[j] ** 2)
         return pin
     pairs = _gauge_entries(w)
     if not pairs:
@@ -69,6 +71,23 @@ def _gauge_pin(h, modes) -> np.ndarray | None:
         hjj = abs(float(hs.data[at])) if at < hi and hs.indices[at] == j else 0.0
         pin[j] = max(hjj, -2.0 * float(mode @ (hs @ mode)) / mode[j] ** 2)
     return pin
+
+
+@njit(cache=True)
+def _pin_parts(indptr, indices, data, mode):
+    """For :func:`_gauge_pin`'s one mode: j = ``np.argmax(np.abs(mode))`` (the first largest,
+    or the first NaN), A_jj, and A ``mode`` (``linalg_csc._csc_matvec``'s sums), in one call."""
+    j = 0
+    best = -1.0
+    for i in range(mode.shape[0]):
+        a = abs(mode[i])
+        if a != a:
+            j = i
+            break
+        if a > best:
+            best = a
+            j = i
+    return j, _diagonal_entry(indptr, indices, data, j), _csc_matvec(indptr, indices, data, mode)
 
 
 def _modes(zero_modes, x, m):

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
+from numba import njit
 
 from .energy import WireEnergy, confinement_weights
 from .geometry import disc_exit_fraction, has_crossings
@@ -479,14 +480,26 @@ def _symmetry_modes(x, wire, lam):
     """Rigid motions that leave the energy unchanged: the rotation about the trap's centre
     (the trap is isotropic), and the two translations when there is no trap. A cavity
     (centred at the origin) allows no translation, and the rotation only about the origin."""
-    center = np.asarray(wire.trap_center)
     cavity = wire.cavity_radius is not None
-    if cavity and lam != 0 and np.any(center != 0):
+    cx, cy = (float(c) for c in wire.trap_center)
+    if cavity and lam != 0 and (cx != 0 or cy != 0):
         return np.zeros((0, x.size))
-    r = x - (0.0 if cavity else center)
+    if cavity:
+        cx = cy = 0.0
     free = lam == 0 and not cavity
-    modes = np.zeros((3 if free else 1, x.size))
-    modes[0, 0::2], modes[0, 1::2] = -r[:, 1], r[:, 0]  # the rotation
-    if free:  # the two translations
-        modes[1, 0::2] = modes[2, 1::2] = 1.0
+    return _rigid_modes(np.ascontiguousarray(x, dtype=np.float64), cx, cy, free)
+
+
+@njit(cache=True)
+def _rigid_modes(x, cx, cy, free):
+    """The rotation about (cx, cy), -(y - cy), x - cx at each node, and with ``free`` the two
+    translations, as the rows of a (1 or 3, x.size) array."""
+    n = x.shape[0]
+    modes = np.zeros((3 if free else 1, 2 * n))
+    for i in range(n):
+        modes[0, 2 * i] = -(x[i, 1] - cy)
+        modes[0, 2 * i + 1] = x[i, 0] - cx
+        if free:
+            modes[1, 2 * i] = 1.0
+            modes[2, 2 * i + 1] = 1.0
     return modes
