@@ -1123,9 +1123,9 @@ def test_releasing_rows_take_out_the_curvature_of_the_pairs_a_step_releases(seed
 @given(seed=st.integers(0, 2**32 - 1), ndof=st.integers(1, 120), t=st.integers(0, 1500))
 def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
     """The fixed-pattern assembly's kernels: the CSC pattern is the sorted distinct (col, row)
-    keys, each triplet's entry is its key's rank, a subset's entries are found in it, a
-    missing key is reported, and the scatter adds as np.bincount does, bit for bit."""
-    from crumple.energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
+    keys, each triplet's entry is its key's rank, and the scatter adds as np.bincount does,
+    bit for bit."""
+    from crumple.energy_assembly import _csc_pattern_kernel, _scatter_add
 
     rng = np.random.default_rng(seed)
     rows, cols = rng.integers(0, ndof, t), rng.integers(0, ndof, t)
@@ -1135,17 +1135,53 @@ def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
     assert np.array_equal(indices, keys % ndof)
     assert np.array_equal(indptr, np.searchsorted(keys // ndof, np.arange(ndof + 1)))
     assert np.array_equal(where, rank)
-    half = slice(0, t // 2)
-    assert np.array_equal(_pattern_where(rows[half], cols[half], indptr, indices), rank[half])
-    if t and len(keys) < ndof * ndof:
-        missing = np.setdiff1d(np.arange(ndof * ndof), keys)[0]
-        w = _pattern_where(np.r_[rows, missing % ndof], np.r_[cols, missing // ndof], indptr,
-                           indices)  # fmt: skip
-        assert w[0] == -1
     vals = rng.standard_normal(t) * 10.0 ** rng.uniform(-8, 8, t)
     assert np.array_equal(
         _scatter_add(where, vals, len(keys)), np.bincount(where, vals, minlength=len(keys))
     )
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 30), m=st.integers(0, 12),
+       keep=st.integers(0, 12), head=st.integers(0, 50))  # fmt: skip
+def test_pair_blocks_are_looked_up_in_a_pattern_as_by_the_ranks_of_their_keys(
+    seed, n, m, keep, head
+):
+    """``_pair_blocks_where``: the given head, then each pair's 6 × 6 block over the nodes
+    (k, j, j + 1) in ``_put_block``'s order, found at its key's rank in a pattern holding it;
+    a pair whose block is not all in the pattern is reported."""
+    from crumple.energy_assembly import _csc_pattern_kernel, _pair_blocks_where
+
+    rng = np.random.default_rng(seed)
+    ndof = 2 * n
+    ks, js = rng.integers(0, n, m), rng.integers(0, n - 1, m)
+
+    def block_keys(k, j):  # _put_block's order: node a, node b, then u, v
+        nodes = (k, j, j + 1)
+        rc = [(2 * nodes[a] + u, 2 * nodes[b] + v)
+              for a in range(3) for b in range(3) for u in range(2) for v in range(2)]  # fmt: skip
+        return np.array(rc).T
+
+    chain = rng.integers(0, ndof, (2, 3 * ndof))
+    parts = [block_keys(k, j) for k, j in zip(ks, js, strict=True)]
+    rows = np.concatenate([chain[0], *(r for r, _ in parts)]).astype(np.int64)
+    cols = np.concatenate([chain[1], *(c for _, c in parts)]).astype(np.int64)
+    indptr, indices, where = _csc_pattern_kernel(rows, cols, ndof)
+    first = where[: min(head, 3 * ndof)]
+    sub = rng.permutation(m)[: min(keep, m)]
+    got, held = _pair_blocks_where(indptr, indices, first, ks[sub], js[sub])
+    assert held
+    want = [first] + [where[3 * ndof + 36 * p : 3 * ndof + 36 * (p + 1)] for p in sub]
+    assert np.array_equal(got, np.concatenate(want).astype(np.int64))
+    # a pair whose block holds an entry the pattern lacks
+    for k in range(n):
+        for j in range(n - 1):
+            r, c = block_keys(k, j)
+            missing = ~np.isin(c * ndof + r, cols * ndof + rows)
+            if missing.any():
+                _, held = _pair_blocks_where(indptr, indices, first, np.array([k]), np.array([j]))
+                assert not held
+                return
 
 
 @settings(max_examples=25, deadline=None)
@@ -1178,6 +1214,34 @@ def test_hessian_assembled_into_its_pattern_is_its_triplets_scattered_bit_for_bi
     where = energy._pattern[4]
     assert np.array_equal(again.data, _scatter_add(where, vals, first.indices.shape[0]))
     assert np.array_equal(again.data, first.data)
+
+
+@pytest.mark.parametrize("project", [False, True])
+def test_a_pattern_kept_for_fewer_pairs_gives_the_hessian_of_a_new_one_bit_for_bit(project):
+    """A rebuilt neighbour list with fewer pairs keeps the pattern (its chain entries where
+    they were, the pairs' blocks looked up, the pairs that left as explicit zeros): the
+    Hessian is that of its triplets scattered into it, and entry for entry that of an energy
+    that built its pattern for these pairs alone."""
+    from crumple.energy_assembly import _scatter_add
+
+    m, seg, d = 6, 0.08, 0.01
+    w = Wire(k_b=2.0, k_s=1e3, n_segments=2 * m, length=2 * m * seg, hard_core=d,
+             hard_core_energy=1e-3)  # fmt: skip
+    energy = WireEnergy(w, lam=3.0)
+    pos = staggered_hairpin(m, seg, 0.5 * d)
+    first = energy.hessian_csc(pos, project_contacts=project)
+    pairs = len(energy._pattern[0])
+    apart = pos.copy()
+    apart[m + 1 : m + 4, 1] += 0.05  # three nodes of the upper strand pulled away
+    again = energy.hessian_csc(apart, project_contacts=project)
+    assert len(energy._pattern[0]) < pairs  # the list was rebuilt, with fewer pairs
+    assert again.indices is first.indices and again.indptr is first.indptr  # the pattern kept
+    _, _, vals = energy._triplets(apart, int(project), False)
+    where = energy._pattern[4]
+    assert np.array_equal(again.data, _scatter_add(where, vals, first.indices.shape[0]))
+    fresh = WireEnergy(w, lam=3.0).hessian_csc(apart, project_contacts=project)
+    assert fresh.indices.shape[0] < again.indices.shape[0]  # a pattern of these pairs alone
+    assert np.array_equal(fresh.tocsc().toarray(), again.tocsc().toarray())
 
 
 def test_touching_says_whether_a_contact_acts():

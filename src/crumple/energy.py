@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .energy_action import _hessian_action
-from .energy_assembly import _csc_pattern_kernel, _pattern_where, _scatter_add
+from .energy_assembly import _csc_pattern_kernel, _pair_blocks_where, _scatter_add
 from .energy_barrier_kernels import _barrier_rows, _release_rows
 from .energy_functions import (
     _plastic_args,
@@ -274,7 +274,9 @@ class WireEnergy:
         project_contacts = _projection(project_contacts)
         x = np.ascontiguousarray(x, dtype=np.float64)
         ks, js = self._pairs(x)
-        if self._pattern is not None and self._pattern[0] is ks:  # straight into the pattern
+        if self._pattern is not None and self._pattern[0] is not ks:
+            self._pattern = self._kept_pattern(ks, js)
+        if self._pattern is not None:  # straight into the pattern
             _, _, indptr, indices, where = self._pattern
             w = self.wire
             data = _hessian_values(  # where unsigned: see crumple.linalg._Symbolic.unsigned
@@ -284,7 +286,7 @@ class WireEnergy:
             )  # fmt: skip
             return CSC(data, indices, indptr)
         rows, cols, vals = self._triplets(x, project_contacts, project_bending)
-        self._pattern = self._new_pattern(ks, js, rows, cols, x.size)
+        self._pattern = (ks, js, *_csc_pattern(rows, cols, x.size))
         _, _, indptr, indices, where = self._pattern
         return CSC(_scatter_add(_unsigned(where), vals, indices.shape[0]), indices, indptr)
 
@@ -314,18 +316,16 @@ class WireEnergy:
             project_bending, self._radius,
         )  # fmt: skip
 
-    def _new_pattern(self, ks, js, rows, cols, ndof):
-        """The pattern for a rebuilt neighbour list. A rebuilt list often holds the same pairs,
-        or fewer: the current pattern (the same index arrays, so that the factorisation keeps
-        its symbolic analysis) is kept whenever it holds every entry of the new one, the
-        entries of pairs that left it staying explicit zeros."""
-        if self._pattern is not None:
-            indptr, indices = self._pattern[2], self._pattern[3]
-            where = _pattern_where(_unsigned(rows), _unsigned(cols), _unsigned(indptr),
-                                   _unsigned(indices))  # fmt: skip
-            if where.shape[0] == 0 or where[0] >= 0:
-                return (ks, js, indptr, indices, where)
-        return (ks, js, *_csc_pattern(rows, cols, ndof))
+    def _kept_pattern(self, ks, js):
+        """The current pattern for a rebuilt neighbour list, or None. A rebuilt list often
+        holds the same pairs, or fewer: the current pattern (the same index arrays, so that the
+        factorisation keeps its symbolic analysis) is kept whenever it holds every entry of
+        the new one, the entries of pairs that left it staying explicit zeros. The chain's
+        triplets add to the entries they did; only the pairs' blocks are looked up."""
+        ks0, _, indptr, indices, where = self._pattern
+        head = where[: where.shape[0] - 36 * ks0.shape[0]]
+        new, held = _pair_blocks_where(_unsigned(indptr), _unsigned(indices), head, ks, js)
+        return (ks, js, indptr, indices, new) if held else None
 
     def touching(self, x) -> bool:
         """Whether some node is inside the hard core of a segment at ``x`` (a contact acts):

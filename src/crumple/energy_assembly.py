@@ -87,24 +87,34 @@ def _scatter_add(where, vals, nnz):
 
 
 @njit(cache=True)
-def _pattern_where(rows, cols, indptr, indices):
-    """The entry of an existing CSC pattern (rows sorted in each column) each triplet adds to,
-    through a row map of each column; ``where[0] = -1`` when some triplet has no entry in it."""
-    t = rows.shape[0]
-    ndof = indptr.shape[0] - 1
-    start, order = _column_order(cols, ndof)
-    slot = np.full(ndof, -1, dtype=np.int64)
-    where = np.empty(t, dtype=np.int64)
-    for c in range(ndof):
-        for p in range(indptr[c], indptr[c + 1]):
-            slot[indices[p]] = p
-        for q in range(start[c], start[c + 1]):
-            e = order[q]
-            w = slot[rows[e]]
-            if w < 0:
-                where[0] = -1
-                return where
-            where[e] = w
-        for p in range(indptr[c], indptr[c + 1]):
-            slot[indices[p]] = -1
-    return where
+def _pair_blocks_where(indptr, indices, head, ks, js):
+    """The entries of an existing CSC pattern (rows sorted in each column) that the triplets
+    ``head`` then one 6 × 6 block per pair p over the nodes (ks[p], js[p], js[p] + 1), in
+    ``_put_block``'s order, add to: ``head`` as it is, each block entry by a binary search
+    in its column. Returns (where, whether every entry is in the pattern)."""
+    h = head.shape[0]
+    where = np.empty(h + 36 * ks.shape[0], dtype=np.int64)
+    where[:h] = head
+    m = h
+    nodes = np.empty(3, dtype=np.int64)
+    for p in range(ks.shape[0]):
+        nodes[0], nodes[1], nodes[2] = ks[p], js[p], js[p] + 1
+        for a in range(3):
+            for b in range(3):
+                for u in range(2):
+                    for v in range(2):
+                        r = 2 * nodes[a] + u
+                        c = 2 * nodes[b] + v
+                        lo, end = np.int64(indptr[c]), np.int64(indptr[c + 1])
+                        hi = end
+                        while lo < hi:  # the first row >= r
+                            mid = (lo + hi) // 2
+                            if np.int64(indices[mid]) < r:
+                                lo = mid + 1
+                            else:
+                                hi = mid
+                        if lo == end or np.int64(indices[lo]) != r:
+                            return where, False
+                        where[m] = lo
+                        m += 1
+    return where, True
