@@ -187,6 +187,15 @@ def _factor_permuted(src, data, perm, shift, floor, n, ap, ai, rp, rc, rpos, lp,
     return negative, modified, first[0]
 
 
+@njit(cache=True)
+def _rows_within(index, n):
+    """Every entry of ``index`` in [0, n) (true for an empty one)."""
+    for v in index.ravel():
+        if v < 0 or v >= n:
+            return False
+    return True
+
+
 _EMPTY = np.empty(0)
 _NO_START = np.zeros(0, dtype=np.bool_)
 _NO_SLOT = np.zeros(0, dtype=np.int64)
@@ -379,7 +388,7 @@ class Factorization:
         if first.shape[0] not in (0, m):
             raise ValueError(f"start must be a boolean mask over the {m} springs")
         index = np.ascontiguousarray(index, dtype=np.int64)
-        if index.size and (index.min() < 0 or index.max() >= sym.n):
+        if not _rows_within(index, sym.n):
             raise ValueError(f"the springs' rows must index the {sym.n} unknowns")
         value = np.ascontiguousarray(value, dtype=np.float64)
         known_slot, known_cols = self._known_columns(index, value)
