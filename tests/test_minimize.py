@@ -1933,3 +1933,24 @@ def test_newton_stops_where_it_no_longer_makes_progress():
     assert r.iterations == 30 and r.message == "maximum number of iterations reached"
     with pytest.raises(ValueError, match="patience"):
         newton(bowl, np.ones(2), hess=stiff, patience=0)
+
+
+def test_merged_listings_append_the_springs_not_listed_before_in_their_order():
+    """A relisting's springs join the first listing's: those whose row of ``index`` is new,
+    after the first's, in the relisting's order, with their values, offsets and stiffnesses;
+    a relisting with nothing new leaves the first listing as it is."""
+    from crumple.minimize_barriers import _merged_rows
+
+    rng = np.random.default_rng(5)
+    index = rng.integers(0, 40, (6, 6))
+    first = (index[:4], rng.normal(size=(4, 6)), -rng.uniform(size=4), rng.uniform(1, 2, 4))
+    again = (index[[2, 5, 0, 4]], rng.normal(size=(4, 6)), -rng.uniform(size=4),
+             rng.uniform(1, 2, 4))  # fmt: skip
+    merged, grown = _merged_rows(first, again)
+    assert grown
+    for got, a, b in zip(merged, first, again, strict=True):
+        assert np.array_equal(got, np.concatenate([a, b[[1, 3]]]))
+    same = (index[[3, 1]], rng.normal(size=(2, 6)), -rng.uniform(size=2), rng.uniform(1, 2, 2))
+    kept, grown = _merged_rows(first, same)
+    assert kept is first and not grown
+    assert _merged_rows(first, tuple(a[:0] for a in same)) == (first, False)

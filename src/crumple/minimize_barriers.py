@@ -15,7 +15,9 @@ unchanged: only the step is.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
+from .linalg_solve import _row_positions
 from .linalg_springs import _rows_dot, new_rows, spring_step
 from .minimize_result import _equal, all_finite
 
@@ -124,9 +126,31 @@ def _merged_rows(rows, more):
     Both listings are made at the same point, so a spring is known by its row of ``index``."""
     if len(more[2]) == 0:
         return rows, False
-    new = new_rows(
-        np.ascontiguousarray(rows[0], dtype=np.int64), np.ascontiguousarray(more[0], dtype=np.int64)
-    )
-    if not new.any():
-        return rows, False
-    return tuple(np.concatenate([a, b[new]]) for a, b in zip(rows, more, strict=True)), True
+    index, value, offset, stiff, grown = _merge(
+        *(np.ascontiguousarray(a, dtype=t) for a, t in zip(rows, _TYPES, strict=True)),
+        *(np.ascontiguousarray(a, dtype=t) for a, t in zip(more, _TYPES, strict=True)),
+    )  # fmt: skip
+    return ((index, value, offset, stiff) if grown else rows), grown
+
+
+_TYPES = (np.int64, np.float64, np.float64, np.float64)
+
+
+@njit(cache=True)
+def _merge(index, value, offset, stiff, index2, value2, offset2, stiff2):
+    """:func:`_merged_rows` in one call: the rows of the second listing whose ``index`` row is
+    not one of the first's (``linalg_springs.new_rows``), appended in their order."""
+    new = _row_positions(index, index2, np.empty((0, 0)), np.empty((0, 0))) < 0
+    k = new.sum()
+    m = offset.shape[0]
+    out_i = np.empty((m + k, index.shape[1]), dtype=np.int64)
+    out_v = np.empty((m + k, value.shape[1]))
+    out_o = np.empty(m + k)
+    out_s = np.empty(m + k)
+    out_i[:m], out_v[:m], out_o[:m], out_s[:m] = index, value, offset, stiff
+    c = m
+    for r in range(new.shape[0]):
+        if new[r]:
+            out_i[c], out_v[c], out_o[c], out_s[c] = index2[r], value2[r], offset2[r], stiff2[r]
+            c += 1
+    return out_i, out_v, out_o, out_s, k > 0
