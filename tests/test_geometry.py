@@ -360,6 +360,30 @@ def test_find_crossings_matches_reference_on_random_walks(seed, n, turn):
     assert got == ref_crossings(pos)
 
 
+@settings(max_examples=150, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), turn=st.sampled_from([1.0, 3.1]),
+       grid=st.booleans())  # fmt: skip
+def test_the_crossing_checks_sweep_finds_the_pairs_of_the_spatial_hash(seed, n, turn, grid):
+    """Up to ``SWEEP_MAX`` segments the crossing check lists the pairs of overlapping boxes by
+    a sweep along x: the same set as the spatial hash it replaces there, on random walks and on
+    integer grids (boxes that touch at an edge, equal left edges)."""
+    from crumple.geometry.cells import CROWD, _segment_pairs
+    from crumple.geometry.crossings import _sweep_pairs
+
+    rng = np.random.default_rng(seed)
+    pos = random_walk(rng, n, turn)
+    if grid:
+        pos = np.round(pos * 2.0)
+    swept = _sweep_pairs(pos)
+    hashed = _segment_pairs(pos[:-1, 0].copy(), pos[:-1, 1].copy(), pos[1:, 0].copy(),
+                            pos[1:, 1].copy(), 0.0, 1, 0, CROWD)  # fmt: skip
+    assert len(swept) == len({tuple(p) for p in swept.tolist()})  # each pair once
+    assert {tuple(p) for p in swept.tolist()} == {tuple(p) for p in hashed.tolist()}
+    assert np.all(swept[:, 0] < swept[:, 1])
+    pos[n // 2, 1] = np.nan
+    assert _sweep_pairs(pos).tolist() == [[-1, -1]]  # the caller then takes the hash
+
+
 def test_find_crossings_large_integer_walk_against_vectorised_brute_force():
     """A long random walk on an integer lattice (exact in doubles: |coords| < 2^20) checked
     against an O(N^2) exact integer brute force: exercises the spatial hash at scale."""

@@ -223,10 +223,62 @@ def _fold_back(pos, i):
     return False, dot > 4.0 * _EPS * (abs(ux * vx) + abs(uy * vy))
 
 
+#: Up to this many segments the crossing check finds the pairs of overlapping boxes by a sweep
+#: along x (:func:`_sweep_pairs`), above it by the spatial hash (``cells._segment_pairs``): the
+#: same pairs. Measured on packed wires (λ = 300): the sweep 2.7–2.9× faster at N = 100 … 1000
+#: (2.9 against 7.9 µs at N = 100, 27.7 against 79.7 µs at 1000); its cost grows as the pairs
+#: overlapping in x alone, faster than N in a dense packing, so the hash keeps large wires.
+#: Read when the kernel compiles.
+SWEEP_MAX = 1024
+
+
+@njit(cache=True)
+def _sweep_pairs(pos):
+    """All pairs (p, q), p < q, of segments whose closed bounding boxes overlap: the boxes
+    sorted by their left edge, each compared with those that start before its right edge ends.
+    In no particular order; a first row (-1, -1) where a coordinate is not finite (the
+    caller then takes the hash, whatever such a wire gives there)."""
+    n = pos.shape[0] - 1
+    lox = np.empty(n)
+    hix = np.empty(n)
+    loy = np.empty(n)
+    hiy = np.empty(n)
+    for i in range(n):
+        lox[i] = min(pos[i, 0], pos[i + 1, 0])
+        hix[i] = max(pos[i, 0], pos[i + 1, 0])
+        loy[i] = min(pos[i, 1], pos[i + 1, 1])
+        hiy[i] = max(pos[i, 1], pos[i + 1, 1])
+        if not (np.isfinite(lox[i]) and np.isfinite(hix[i]) and np.isfinite(loy[i])
+                and np.isfinite(hiy[i])):  # fmt: skip
+            return np.full((1, 2), -1, dtype=np.int64)
+    order = np.argsort(lox)
+    out = np.empty((4 * n + 16, 2), dtype=np.int64)
+    m = 0
+    for a in range(n):
+        p = order[a]
+        for b in range(a + 1, n):
+            q = order[b]
+            if lox[q] > hix[p]:  # this box, and every later one, starts right of p's
+                break
+            if loy[p] > hiy[q] or loy[q] > hiy[p]:
+                continue
+            if m == out.shape[0]:
+                bigger = np.empty((2 * m, 2), dtype=np.int64)
+                bigger[:m] = out
+                out = bigger
+            out[m, 0] = min(p, q)
+            out[m, 1] = max(p, q)
+            m += 1
+    return out[:m]
+
+
 @njit(cache=True)
 def _crossing_candidates(pos, stop_at_first):
     """Certain crossings and uncertain pairs (to be decided exactly), as index pairs."""
-    pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.0, 1, 0, CROWD)
+    swept = pos.shape[0] <= SWEEP_MAX + 1
+    pairs = _sweep_pairs(pos) if swept else np.empty((0, 2), dtype=np.int64)
+    if not swept or (pairs.shape[0] and pairs[0, 0] < 0):  # long, or a coordinate not finite
+        pairs = _segment_pairs(pos[:-1, 0], pos[:-1, 1], pos[1:, 0], pos[1:, 1], 0.0, 1, 0, CROWD)
     hits = np.empty((pairs.shape[0], 2), dtype=np.int64)
     unsure = np.empty((pairs.shape[0], 2), dtype=np.int64)
     nh = 0
