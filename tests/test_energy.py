@@ -1141,6 +1141,26 @@ def test_hessian_pattern_kernels_match_a_sort_of_the_triplets(seed, ndof, t):
     )
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 30), m=st.integers(0, 10),
+       cavity=st.booleans())  # fmt: skip
+def test_the_triplets_keys_are_those_of_the_triplets(seed, n, m, cavity):
+    """A new pattern is built from ``_triplet_keys``: the rows and columns of
+    ``_hessian_triplets``, in their order, for any pairs and with or without the wall."""
+    from crumple.energy_kernels import _hessian_triplets, _triplet_keys
+
+    rng = np.random.default_rng(seed)
+    pos = np.cumsum(rng.uniform(0.5, 1.5, (n, 2)), axis=0)
+    ks = rng.integers(0, n, m) if n > 1 else np.zeros(0, dtype=np.int64)
+    js = rng.integers(0, n - 1, m) if n > 1 else np.zeros(0, dtype=np.int64)
+    radius = 50.0 if cavity else np.inf
+    rest = np.zeros(max(n - 2, 0))
+    rows, cols, _ = _hessian_triplets(pos, 1.0, 0.0, 0.0, rest, 10.0, 1.0, 2.0, np.ones(n), ks,
+                                      js, 0.1, 1.0, 0, False, radius)  # fmt: skip
+    keys = _triplet_keys(n, ks, js, cavity)
+    assert np.array_equal(keys[0], rows) and np.array_equal(keys[1], cols)
+
+
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 30), m=st.integers(0, 12),
        keep=st.integers(0, 12), head=st.integers(0, 50))  # fmt: skip

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .energy_action import _hessian_action
-from .energy_assembly import _csc_pattern_kernel, _pair_blocks_where, _scatter_add
+from .energy_assembly import _csc_pattern_kernel, _pair_blocks_where
 from .energy_barrier_kernels import _barrier_rows, _release_rows
 from .energy_functions import (
     _plastic_args,
@@ -59,6 +59,7 @@ from .energy_kernels import (
     _max_displacement,
     _same_pairs,
     _total_eg,
+    _triplet_keys,
 )
 from .energy_line import _line_admissible, _line_energy, _line_prepare
 from .geometry._input import _as_positions
@@ -276,19 +277,17 @@ class WireEnergy:
         ks, js = self._pairs(x)
         if self._pattern is not None and self._pattern[0] is not ks:
             self._pattern = self._kept_pattern(ks, js)
-        if self._pattern is not None:  # straight into the pattern
-            _, _, indptr, indices, where = self._pattern
-            w = self.wire
-            data = _hessian_values(  # where unsigned: see crumple.linalg._Symbolic.unsigned
-                where.view(np.uint64), indices.shape[0], x, w.k_b, self._s, self._tp,
-                self.rest_angles, w.k_s, w.rest_length, self.lam, self.weights, ks, js,
-                w.hard_core, w.hard_core_energy, project_contacts, project_bending, self._radius,
-            )  # fmt: skip
-            return CSC(data, indices, indptr)
-        rows, cols, vals = self._triplets(x, project_contacts, project_bending)
-        self._pattern = (ks, js, *_csc_pattern(rows, cols, x.size))
+        if self._pattern is None:  # the pattern of these pairs: their triplets' keys sorted
+            rows, cols = _triplet_keys(x.shape[0], ks, js, math.isfinite(self._radius))
+            self._pattern = (ks, js, *_csc_pattern(rows, cols, x.size))
         _, _, indptr, indices, where = self._pattern
-        return CSC(_scatter_add(_unsigned(where), vals, indices.shape[0]), indices, indptr)
+        w = self.wire
+        data = _hessian_values(  # the triplets scattered, bit for bit; where unsigned
+            _unsigned(where), indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles,
+            w.k_s, w.rest_length, self.lam, self.weights, ks, js, w.hard_core,
+            w.hard_core_energy, project_contacts, project_bending, self._radius,
+        )  # fmt: skip
+        return CSC(data, indices, indptr)
 
     def hessian_action(self, x, v) -> np.ndarray:
         """The exact Hessian times ``v`` (over ``x.ravel()``), in element form: flat (x.size,).

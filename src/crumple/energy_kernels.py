@@ -291,6 +291,53 @@ def _hessian_triplets(pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
 
 
 @njit(cache=True)
+def _triplet_keys(n, ks, js, wall):
+    """The rows and columns of :func:`_hessian_triplets` for ``n`` nodes, the candidate pairs
+    (ks, js) and, with ``wall``, the cavity's wall, without their values: the same triplets in
+    the same order (bending, stretching, confinement, the wall, the pairs), all that a new
+    pattern needs (``_put_block``'s and ``_put``'s orders)."""
+    size = 36 * max(n - 2, 0) + 16 * max(n - 1, 0) + (6 if wall else 2) * n + 36 * ks.shape[0]
+    rows = np.empty(size, dtype=np.int64)
+    cols = np.empty(size, dtype=np.int64)
+    nodes = np.empty(3, dtype=np.int64)
+    m = 0
+    for i in range(1, n - 1):
+        nodes[0], nodes[1], nodes[2] = i - 1, i, i + 1
+        m = _put_keys(rows, cols, m, nodes, 3)
+    for i in range(n - 1):
+        nodes[0], nodes[1] = i, i + 1
+        m = _put_keys(rows, cols, m, nodes, 2)
+    for i in range(n):
+        for u in range(2):
+            rows[m] = cols[m] = 2 * i + u
+            m += 1
+    if wall:
+        for i in range(n):
+            for u in range(2):
+                for v in range(2):
+                    rows[m], cols[m] = 2 * i + u, 2 * i + v
+                    m += 1
+    for p in range(ks.shape[0]):
+        nodes[0], nodes[1], nodes[2] = ks[p], js[p], js[p] + 1
+        m = _put_keys(rows, cols, m, nodes, 3)
+    return rows, cols
+
+
+@njit(cache=True)
+def _put_keys(rows, cols, m, nodes, p):
+    """The keys of a (2p, 2p) block over ``nodes[:p]`` from index m, in ``_put_block``'s
+    order; returns the next index."""
+    for a in range(p):
+        for b in range(p):
+            for u in range(2):
+                for v in range(2):
+                    rows[m] = 2 * nodes[a] + u
+                    cols[m] = 2 * nodes[b] + v
+                    m += 1
+    return m
+
+
+@njit(cache=True)
 def _hessian_values(where, nnz, pos, k_b, s, theta_p, rest, k_s, l0, lam, weights, ks, js,
                     width, strength, project, project_bending=False, radius=math.inf):  # fmt: skip
     """The CSC data of the exact Hessian in a known pattern, ``where[e]`` the entry triplet e
