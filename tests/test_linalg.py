@@ -733,8 +733,13 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
     assert (f.negative, f.modified) == (g.negative, g.modified)
     assert np.array_equal(f.solve(v), g.solve(v))
     col = np.repeat(np.arange(n), np.diff(a.indptr))
-    sums = np.bincount(col, weights=np.abs(a.data) * np.abs(v)[a.indices], minlength=n)
-    assert raw.abs_row_max(np.abs(v)) == float(np.max(sums))
+    x = v * 10.0 ** rng.uniform(-3, 3, n)
+    ulp = np.spacing(np.abs(x))
+    sums = np.bincount(col, weights=np.abs(a.data) * ulp[a.indices], minlength=n)
+    assert raw.abs_row_max_ulp(x) == float(np.max(sums))
+    from crumple.minimize_resolution import _force_resolution
+
+    assert _force_resolution(raw, x) == _force_resolution(a, x)  # either branch, the same
     assert raw.tocsc() is raw.tocsc() and raw.nnz == a.nnz
 
 

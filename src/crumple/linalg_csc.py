@@ -121,6 +121,17 @@ def _abs_weighted_row_max(indptr, indices, data, u):
     return best
 
 
+@njit(cache=True)
+def _abs_row_max_ulp(indptr, indices, data, x):
+    """:func:`_abs_weighted_row_max` with u = ``np.spacing(np.abs(x)).ravel()``, computed here
+    (spacing is exact: the same u)."""
+    xf = x.ravel()
+    u = np.empty(xf.shape[0])
+    for i in range(xf.shape[0]):
+        u[i] = np.spacing(abs(xf[i]))
+    return _abs_weighted_row_max(indptr, indices, data, u)
+
+
 class CSC:
     """A square sparse matrix held as its raw CSC arrays (both triangles), unchecked.
 
@@ -174,9 +185,10 @@ class CSC:
             return _csc_matvec(*self.unsigned, self.data, v)
         return self.tocsc() @ v
 
-    def abs_row_max(self, u) -> float:
-        """max_i Σ_j |A_ij| u_j (A symmetric): the largest change of A u's rows by a move u."""
-        return float(_abs_weighted_row_max(*self.unsigned, self.data, u))
+    def abs_row_max_ulp(self, x) -> float:
+        """max_i Σ_j |A_ij| u_j (A symmetric), u = ulp(|x|) flattened: the most a row of A x
+        can change when every coordinate moves by one unit in its last place."""
+        return float(_abs_row_max_ulp(*self.unsigned, self.data, np.ascontiguousarray(x)))
 
     def diagonal_entry(self, j: int) -> float:
         """A_jj (0 where the pattern does not store it)."""

@@ -26,9 +26,9 @@ def _force_resolution(h, x) -> float:
     """``RESOLUTION_FACTOR`` × max_i Σ_j |H_ij| ulp(x_j): how much the force on a row can change
     when the coordinates move by one unit in the last place. Below it the force is noise: a
     stiff wire of 10⁴ nodes at |x| ~ 0.5 cannot be brought below ~2e-5 (measured, B = 0.05)."""
-    u = np.spacing(np.abs(x)).ravel()
     if isinstance(h, CSC):
-        return RESOLUTION_FACTOR * h.abs_row_max(u) if h.nnz else 0.0
+        return RESOLUTION_FACTOR * h.abs_row_max_ulp(x) if h.nnz else 0.0
+    u = np.spacing(np.abs(x)).ravel()
     if sp.issparse(h) and h.format == "csc" and h.shape[0] == h.shape[1] and h.nnz:
         # column sums of |H| u[row], = row sums by symmetry: no new sparse matrix
         r = np.bincount(
