@@ -65,6 +65,7 @@ from .energy_line import _line_admissible, _line_energy, _line_prepare
 from .geometry._input import _as_positions
 from .geometry.distance import _node_segment_pairs
 from .linalg import CSC
+from .linalg_csc import unsigned_view
 from .model import Wire
 
 __all__ = [
@@ -283,7 +284,7 @@ class WireEnergy:
         _, _, indptr, indices, where = self._pattern
         w = self.wire
         data = _hessian_values(  # the triplets scattered, bit for bit; where unsigned
-            _unsigned(where), indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles,
+            where, indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles,
             w.k_s, w.rest_length, self.lam, self.weights, ks, js, w.hard_core,
             w.hard_core_energy, project_contacts, project_bending, self._radius,
         )  # fmt: skip
@@ -323,7 +324,7 @@ class WireEnergy:
         triplets add to the entries they did; only the pairs' blocks are looked up."""
         ks0, _, indptr, indices, where = self._pattern
         head = where[: where.shape[0] - 36 * ks0.shape[0]]
-        new, held = _pair_blocks_where(_unsigned(indptr), _unsigned(indices), head, ks, js)
+        new, held = _pair_blocks_where(unsigned_view(indptr), unsigned_view(indices), head, ks, js)
         return (ks, js, indptr, indices, new) if held else None
 
     def touching(self, x) -> bool:
@@ -395,18 +396,11 @@ def _projection(project_contacts) -> int:
     raise ValueError(f"project_contacts must be False, True or 'caps', got {project_contacts!r}")
 
 
-def _unsigned(index):
-    """An index array (non-negative integers) as an unsigned view of the same memory: Numba
-    checks a signed index for wrap-around at every access, an unsigned one not (the same
-    numbers, so the same results; :attr:`crumple.linalg._Symbolic.unsigned`)."""
-    return index.view(np.dtype(f"u{index.dtype.itemsize}"))
-
-
 def _csc_pattern(rows, cols, ndof):
     """CSC pattern (indptr, indices) of the triplets, and the entry each triplet adds to."""
-    indptr, indices, where = _csc_pattern_kernel(_unsigned(rows), _unsigned(cols), ndof)
+    indptr, indices, where = _csc_pattern_kernel(unsigned_view(rows), unsigned_view(cols), ndof)
     index = np.int32 if indices.shape[0] < 2**31 - 1 else np.int64
-    return indptr.astype(index), indices.astype(index), where
+    return indptr.astype(index), indices.astype(index), unsigned_view(where)
 
 
 def energy_terms(wire: Wire, positions, lam: float, *, rest_angles=None) -> EnergyTerms:

@@ -93,7 +93,7 @@ def _pair_blocks_where(indptr, indices, head, ks, js):
     ``_put_block``'s order, add to: ``head`` as it is, each block entry by a binary search
     in its column. Returns (where, whether every entry is in the pattern)."""
     h = head.shape[0]
-    where = np.empty(h + 36 * ks.shape[0], dtype=np.int64)
+    where = np.empty(h + 36 * ks.shape[0], dtype=np.uint64)  # as the pattern's (unsigned)
     where[:h] = head
     m = h
     nodes = np.empty(3, dtype=np.int64)

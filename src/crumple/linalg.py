@@ -29,7 +29,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from .linalg_csc import CSC, dense_csc, pin_rows
+from .linalg_csc import CSC, dense_csc, pin_rows, unsigned_view
 from .linalg_order import _rcm, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
@@ -264,10 +264,9 @@ class _Symbolic:
 def _permuted_upper(a, perm):
     """Upper triangle of P A Pᵀ as CSC (int64), and where each of its entries is in ``a.data``
     (the kernel reads unsigned views of the index arrays: :attr:`_Symbolic.unsigned`)."""
-    indptr, indices = np.ascontiguousarray(a.indptr), np.ascontiguousarray(a.indices)
     return _permuted_upper_kernel(
-        a.shape[0], indptr.view(f"u{indptr.itemsize}"), indices.view(f"u{indices.itemsize}"),
-        np.ascontiguousarray(perm, dtype=np.int64).view(np.uint64),
+        a.shape[0], unsigned_view(a.indptr), unsigned_view(a.indices),
+        unsigned_view(np.asarray(perm, dtype=np.int64)),
     )  # fmt: skip
 
 

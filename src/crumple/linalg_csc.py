@@ -132,6 +132,17 @@ def _abs_row_max_ulp(indptr, indices, data, x):
     return _abs_weighted_row_max(indptr, indices, data, u)
 
 
+_UNSIGNED = {1: np.uint8, 2: np.uint16, 4: np.uint32, 8: np.uint64}
+
+
+def unsigned_view(index: np.ndarray) -> np.ndarray:
+    """An array of non-negative integers as an unsigned view of the same memory (made
+    contiguous first): the same numbers, read by a kernel without Numba's wrap-around check of
+    a signed index (:attr:`crumple.linalg._Symbolic.unsigned`)."""
+    index = np.ascontiguousarray(index)
+    return index.view(_UNSIGNED[index.dtype.itemsize])
+
+
 class CSC:
     """A square sparse matrix held as its raw CSC arrays (both triangles), unchecked.
 
@@ -163,8 +174,7 @@ class CSC:
         checks a signed index for wrap-around at every access, an unsigned one not (the same
         numbers, so the same results; :attr:`crumple.linalg._Symbolic.unsigned`)."""
         if self._unsigned is None:
-            p, i = np.ascontiguousarray(self.indptr), np.ascontiguousarray(self.indices)
-            self._unsigned = (p.view(f"u{p.itemsize}"), i.view(f"u{i.itemsize}"))
+            self._unsigned = (unsigned_view(self.indptr), unsigned_view(self.indices))
         return self._unsigned
 
     @property
