@@ -117,7 +117,8 @@ def confinement_weights(n_nodes: int, kind: str, length: float = 1.0) -> np.ndar
         return np.ones(n_nodes)
     if kind == "per-length":
         w = np.full(n_nodes, length / (n_nodes - 1))
-        w[[0, -1]] *= 0.5
+        w[0] *= 0.5
+        w[-1] *= 0.5
         return w
     raise ValueError(f"confinement must be 'per-length' or 'per-node', got {kind!r}")
 
