@@ -129,53 +129,66 @@ def test_symbolic_analysis_is_reused_while_the_pattern_holds():
 
 
 def test_a_new_solver_recalls_a_recent_analysis_of_the_same_pattern_bit_for_bit():
-    """A solver without points takes the analysis another made of the same pattern (a Newton
-    minimisation per stage makes a new solver): the same factor, bit for bit, as analysing
-    anew; a pattern changed in place by its owner after the analysis is not mistaken for it."""
-    import crumple.linalg as la
+    """A sharing solver takes the analysis another made of the same pattern (the Newton
+    minimiser makes one per stage): the same factor, bit for bit, as analysing anew."""
+    from crumple.linalg import forget_analyses
 
     rng = np.random.default_rng(11)
     a = random_symmetric(rng, 40, 0.1, 10.0)
-    la._recent.clear()
-    first = LDLT()
-    f1 = first.factorize(a)
-    second = LDLT()
+    forget_analyses()
+    f1 = LDLT(shared=True).factorize(a)
+    second = LDLT(shared=True)
     f2 = second.factorize(a.copy())
     assert f2._sym is f1._sym and second.analyses == 1  # recalled, counted as taken up
-    la._recent.clear()
-    f3 = LDLT().factorize(a.copy())  # analysed anew
+    forget_analyses()
+    f3 = LDLT(shared=True).factorize(a.copy())  # analysed anew
     assert f3._sym is not f1._sym
     b = np.arange(40.0)
-    assert np.array_equal(f2.solve(b), f3.solve(b)) and np.array_equal(f2._lx, f3._lx)
-    # the owner of the analysed matrix rewrites its pattern in place: the copy kept decides
+    assert f2.solve(b).tobytes() == f3.solve(b).tobytes() and f2._lx.tobytes() == f3._lx.tobytes()
+
+
+def test_a_pattern_changed_in_place_by_its_owner_is_not_recalled_for_another():
+    """An analysis kept for sharing holds copies of its pattern: the owner of the analysed
+    matrix rewriting its arrays in place (to another pattern of the same size) neither makes
+    the kept analysis match the new pattern nor a recalled one match it later."""
+    from crumple.linalg import forget_analyses
+
     n = 40
     c = sp.diags([np.ones(n - 1), np.full(n, 4.0), np.ones(n - 1)], [-1, 0, 1]).tocsc()
     d = sp.diags(
         [[1.0], np.ones(n - 2), np.full(n, 4.0), np.ones(n - 2), [1.0]], [1 - n, -2, 0, 2, n - 1]
     ).tocsc()
     assert c.nnz == d.nnz
-    LDLT().factorize(c)
-    c.indptr[:], c.indices[:], c.data[:] = d.indptr, d.indices, d.data  # c is now d
-    f4 = LDLT().factorize(c)
-    la._recent.clear()
-    assert np.array_equal(LDLT().factorize(d).solve(b), f4.solve(b))
-    assert np.allclose(d @ f4.solve(b), b)
+    b = np.arange(float(n))
+    forget_analyses()
+    LDLT(shared=True).factorize(c)  # analysed and kept
+    c_copy = c.copy()
+    c.indptr[:], c.indices[:], c.data[:] = d.indptr, d.indices, d.data  # the owner: c is now d
+    other = LDLT(shared=True)
+    other.factorize(c_copy)  # recalls the analysis of c's old pattern
+    for solver in (other, LDLT(shared=True)):
+        f = solver.factorize(d)
+        assert np.allclose(d @ f.solve(b), b)  # d's own analysis, not c's
+    f = LDLT(shared=True).factorize(c)  # c's arrays, now d's pattern
+    assert np.allclose(d @ f.solve(b), b)
 
 
-def test_solvers_with_points_neither_keep_nor_recall_analyses():
+def test_solvers_with_points_or_not_sharing_neither_keep_nor_recall_analyses():
     """A solver with ``points`` may order by them (a nested dissection of where the unknowns
-    are), so its analysis is not a function of the pattern alone: never shared."""
+    are), so its analysis is not a function of the pattern alone: never shared; nor is that of
+    a solver made without ``shared``."""
     import crumple.linalg as la
 
     rng = np.random.default_rng(12)
     a = random_symmetric(rng, 20, 0.2, 10.0)
-    la._recent.clear()
-    LDLT(points=lambda: rng.uniform(size=(20, 1))).factorize(a)
-    assert la._recent == []
+    la.forget_analyses()
+    LDLT(points=lambda: rng.uniform(size=(20, 1)), shared=True).factorize(a)
     LDLT().factorize(a)
-    assert len(la._recent) == 1
-    solver = LDLT(points=lambda: rng.uniform(size=(20, 1)))
-    assert solver.factorize(a)._sym is not la._recent[0][2]
+    assert la._recent == []
+    kept = LDLT(shared=True).factorize(a)._sym
+    assert la._recent == [kept]
+    assert LDLT(points=lambda: rng.uniform(size=(20, 1)), shared=True).factorize(a)._sym is not kept
+    assert LDLT().factorize(a)._sym is not kept
 
 
 @settings(max_examples=30, deadline=None)
@@ -720,6 +733,7 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
     """linalg.CSC (the Newton hot path's Hessian) factorises, multiplies and bounds exactly as
     the SciPy matrix on the same arrays: the iterates cannot depend on which one is passed."""
     from crumple.linalg import CSC
+    from crumple.minimize_resolution import _force_resolution
 
     rng = np.random.default_rng(seed)
     a = random_symmetric(rng, n, density, 3.0)
@@ -737,8 +751,6 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
     ulp = np.spacing(np.abs(x))
     sums = np.bincount(col, weights=np.abs(a.data) * ulp[a.indices], minlength=n)
     assert raw.abs_row_max_ulp(x) == float(np.max(sums))
-    from crumple.minimize_resolution import _force_resolution
-
     assert _force_resolution(raw, x) == _force_resolution(a, x)  # either branch, the same
     assert raw.tocsc() is raw.tocsc() and raw.nnz == a.nnz
 

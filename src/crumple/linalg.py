@@ -20,7 +20,9 @@ caller gives the points the unknowns sit at, a nested dissection of them (a pack
 
 A pattern is recognised by the identity of the CSC index arrays of the matrix (or, failing
 that, their contents), so a caller that assembles into a fixed pattern
-(:class:`crumple.energy.WireEnergy`) pays the analysis once per neighbour list.
+(:class:`crumple.energy.WireEnergy`) pays the analysis once per neighbour list; solvers made
+with ``shared=True`` (the Newton minimiser's, one per minimisation) also recall the last
+analyses of each other's patterns (:data:`RECENT`).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from .linalg_csc import CSC, dense_csc, pin_rows, unsigned_view
 from .linalg_order import _rcm, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
-__all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "pin_rows"]
+__all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "forget_analyses", "pin_rows"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -237,8 +239,9 @@ class _Symbolic:
         is non-negative, so the same numbers). Numba checks a signed index for wrap-around at
         every access, an unsigned one not: the factorisation's kernel measured 1.7× faster at
         N = 100 and 1.9× at N = 1000, the same operations in the same order, so the same bits
-        (docs/performance.md, "Unsigned indices"). Made once, after the row patterns are set
-        (:meth:`LDLT.symbolic` sets them at once)."""
+        (docs/performance.md, "Unsigned indices"). ``factor`` is the tuple of those the
+        factorisation's kernel takes after its data (n, ap, ai, rp, rc, rpos, lp, li). Made
+        once, after the row patterns are set (:meth:`LDLT.symbolic` sets them at once)."""
         if self._unsigned is None:
             names = ("src", "perm", "ap", "ai", "rp", "rc", "rpos", "lp", "ai_l")
             self._unsigned = {
@@ -435,28 +438,35 @@ class Factorization:
         return _unit_back_solve(s.n, u["lp"], u["li"], self._lx, u["perm"], k)
 
 
-#: How many symbolic analyses (of solvers without ``points``) are kept for any solver to
-#: recall: a Newton minimisation per stage of a ramp makes a new solver, whose first pattern is
-#: most often the one the last stage ended with (measured, the default N = 100 ramp: 37 of its
-#: 138 analyses were of the pattern analysed just before). Patterns are compared entry by entry.
+#: How many symbolic analyses of sharing solvers (``LDLT(shared=True)``) are kept for any of them
+#: to recall: the Newton minimiser makes a solver per minimisation, so per stage of a ramp, and
+#: its first pattern is most often the one the stage before ended with (measured, the default
+#: N = 100 ramp: 37 of its 138 analyses were of the pattern analysed just before). A kept
+#: analysis holds copies of its pattern's arrays, so that no caller's later change of its own
+#: arrays in place can make it match another pattern; patterns are compared entry by entry.
 RECENT = 2
-_recent: list[tuple] = []  # (indptr, indices, analysis), most recent first; copies of the
-# pattern, so that a caller who later changes its matrix's arrays in place cannot alter them
+_recent: list[_Symbolic] = []  # most recent first
 
 
 def _recall(a) -> _Symbolic | None:
     """The kept analysis of ``a``'s pattern, moved to the front, or None."""
-    for k, (indptr, indices, sym) in enumerate(_recent):
-        same = a.shape[0] == sym.n and a.indices.shape == indices.shape
-        if same and np.array_equal(a.indptr, indptr) and np.array_equal(a.indices, indices):
+    for k, sym in enumerate(_recent):
+        if sym.matches(a):
             _recent.insert(0, _recent.pop(k))
             return sym
     return None
 
 
 def _remember(sym: _Symbolic) -> None:
-    _recent.insert(0, (sym.indptr.copy(), sym.indices.copy(), sym))
+    sym.indptr, sym.indices = sym.indptr.copy(), sym.indices.copy()
+    _recent.insert(0, sym)
     del _recent[RECENT:]
+
+
+def forget_analyses() -> None:
+    """Drop the analyses kept for sharing solvers (:data:`RECENT`): their memory, or a test's
+    clean start."""
+    _recent.clear()
 
 
 class LDLT:
@@ -470,6 +480,12 @@ class LDLT:
         not hold the unknowns or are not finite: none). The fill-reducing order is then also
         sought by a nested dissection of them
         (:func:`crumple.linalg_order.nested_dissection`), kept where its L is smallest.
+    shared : bool
+        Without ``points``: take a new pattern's analysis from the last :data:`RECENT` that
+        sharing solvers made, where one is of the same pattern (an analysis is a function of
+        the pattern alone, so the factors are the same bit for bit), and keep this solver's
+        for them. Off by default (a kept analysis holds memory: :func:`forget_analyses`); the
+        Newton minimiser turns it on.
 
     Examples
     --------
@@ -481,30 +497,30 @@ class LDLT:
     1
     """
 
-    def __init__(self, points=None):
+    def __init__(self, points=None, *, shared: bool = False):
         self._sym: _Symbolic | None = None
         self._arrays = (None, None)  # the index arrays that ``_sym`` was last matched with
         self._points = points
+        self._shared = bool(shared) and points is None
         self.analyses = 0
         self.factorizations = 0
         self.modifications = 0  # rank-one modifications of a factor (crumple.linalg_update)
 
     def symbolic(self, a) -> _Symbolic:
         """The symbolic analysis of ``a``'s pattern: this solver's last one while the pattern
-        holds, else one of the :data:`RECENT` analyses made last by any solver without
-        ``points`` if its pattern is ``a``'s (a deterministic function of the pattern, so the
-        same factors bit for bit), else a new one. ``analyses`` counts the patterns taken up,
+        holds, else (``shared``) one of the :data:`RECENT` analyses kept by sharing solvers if
+        its pattern is ``a``'s, else a new one. ``analyses`` counts the patterns taken up,
         recalled or analysed."""
         if self._sym is not None and a.indptr is self._arrays[0] and a.indices is self._arrays[1]:
             return self._sym  # the arrays last taken up: the pattern holds (the hot path)
         if self._sym is None or not self._sym.matches(a):
-            sym = None if self._points is not None else _recall(a)
+            sym = _recall(a) if self._shared else None
             if sym is None:
                 sym = _Symbolic(a, self._candidate(a))
                 sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(
                     sym.n, sym.ap, sym.ai, sym.parent, sym.lp
                 )
-                if self._points is None:
+                if self._shared:
                     _remember(sym)
             self._sym = sym
             self.analyses += 1

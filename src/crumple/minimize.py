@@ -265,7 +265,8 @@ def newton(
     )  # fmt: skip
     if patience is not None:
         patience = int(patience)
-    ldl = LDLT(points=(lambda: st.x if st.x.ndim == 2 else None) if order_by_points else None)
+    points = (lambda: st.x if st.x.ndim == 2 else None) if order_by_points else None
+    ldl = LDLT(points=points, shared=True)  # a ramp's next stage recalls this one's analyses
     floor = curvature_tol * m
     message = "maximum number of iterations reached"
     while True:
