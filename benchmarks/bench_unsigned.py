@@ -46,6 +46,8 @@ def _signed(self):
         cached = {("li" if k == "ai_l" else k): np.ascontiguousarray(getattr(self, k),
                                                                      dtype=np.int64)
                   for k in names}  # fmt: skip
+        cached["factor"] = (self.n, cached["ap"], cached["ai"], cached["rp"], cached["rc"],
+                            cached["rpos"], cached["lp"], cached["li"])  # fmt: skip
         self._signed_arrays = cached
     return cached
 
