@@ -362,12 +362,14 @@ def test_find_crossings_matches_reference_on_random_walks(seed, n, turn):
 
 @settings(max_examples=150, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 300), turn=st.sampled_from([1.0, 3.1]),
-       grid=st.booleans())  # fmt: skip
-def test_the_crossing_checks_sweep_finds_the_pairs_of_the_spatial_hash(seed, n, turn, grid):
-    """Up to ``SWEEP_MAX`` segments the crossing check lists the pairs of overlapping boxes by
-    a sweep along x: the same set as the spatial hash it replaces there, on random walks and on
-    integer grids (boxes that touch at an edge, equal left edges)."""
-    from crumple.geometry.cells import CROWD, _segment_pairs
+       grid=st.booleans(), bad=st.sampled_from([None, 0, -1, "mid"]))  # fmt: skip
+def test_the_crossing_checks_sweep_finds_every_pair_of_overlapping_boxes(seed, n, turn, grid, bad):
+    """Up to ``SWEEP_MAX`` segments the crossing check lists the pairs of overlapping boxes by a
+    sweep along x: every pair of segments whose closed boxes overlap, each once (against all
+    pairs tested), on random walks and on integer grids (boxes that touch at an edge, equal
+    left edges, zero-length segments), as the one-cell hash lists them; a coordinate that is
+    not finite, at any node, is reported instead."""
+    from crumple.geometry.cells import _segment_pairs
     from crumple.geometry.crossings import _sweep_pairs
 
     rng = np.random.default_rng(seed)
@@ -375,13 +377,18 @@ def test_the_crossing_checks_sweep_finds_the_pairs_of_the_spatial_hash(seed, n, 
     if grid:
         pos = np.round(pos * 2.0)
     swept = _sweep_pairs(pos)
-    hashed = _segment_pairs(pos[:-1, 0].copy(), pos[:-1, 1].copy(), pos[1:, 0].copy(),
-                            pos[1:, 1].copy(), 0.0, 1, 0, CROWD)  # fmt: skip
-    assert len(swept) == len({tuple(p) for p in swept.tolist()})  # each pair once
-    assert {tuple(p) for p in swept.tolist()} == {tuple(p) for p in hashed.tolist()}
-    assert np.all(swept[:, 0] < swept[:, 1])
-    pos[n // 2, 1] = np.nan
-    assert _sweep_pairs(pos).tolist() == [[-1, -1]]  # the caller then takes the hash
+    lo, hi = np.minimum(pos[:-1], pos[1:]), np.maximum(pos[:-1], pos[1:])
+    p, q = np.triu_indices(n, 1)
+    overlap = np.all((lo[p] <= hi[q]) & (lo[q] <= hi[p]), axis=1)
+    assert len(swept) == len({tuple(r) for r in swept.tolist()})  # each pair once
+    every = set(zip(p[overlap].tolist(), q[overlap].tolist(), strict=True))
+    assert {tuple(r) for r in swept.tolist()} == every
+    one_cell = _segment_pairs(pos[:-1, 0].copy(), pos[:-1, 1].copy(), pos[1:, 0].copy(),
+                              pos[1:, 1].copy(), 0.0, 1, 0, np.inf)  # fmt: skip
+    assert {tuple(r) for r in swept.tolist()} == {tuple(r) for r in one_cell.tolist()}
+    if bad is not None:
+        pos[n // 2 if bad == "mid" else bad, 1] = np.nan
+        assert _sweep_pairs(pos).tolist() == [[-1, -1]]  # the caller then takes the hash
 
 
 def test_find_crossings_large_integer_walk_against_vectorised_brute_force():

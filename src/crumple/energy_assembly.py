@@ -2,9 +2,11 @@
 
 Private: :class:`crumple.energy.WireEnergy` finds the CSC pattern of its triplets once per
 neighbour list (rows sorted in each column, duplicates merged) and the entry each triplet adds
-to, then assembles every Hessian by one scatter-add into that pattern. Nothing here knows what
-a wire is. Split from ``energy_kernels.py`` (the terms' kernels), which stays one readable
-module.
+to (or, for a rebuilt list that the pattern still holds, only its pairs' entries), then
+assembles every Hessian into that pattern (``energy_kernels._hessian_values``: the same sums
+as the scatter-add of its triplets, :func:`_scatter_add`, the reference the tests hold it
+to). Nothing here knows what a wire is. Split from ``energy_kernels.py`` (the terms'
+kernels), which stays one readable module.
 """
 
 from __future__ import annotations

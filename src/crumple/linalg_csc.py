@@ -86,7 +86,9 @@ def _pin(indptr, indices, data, mask, drop_zeros):
 
 @njit(cache=True)
 def _csc_matvec(indptr, indices, data, v):
-    """A v for A in CSC: SciPy's ``csc_matvec`` loop, the same products added in its order."""
+    """A v for A in CSC: SciPy's ``csc_matvec`` loop, the same products added in its order.
+    Called by the cached ``minimize_modes._pin_parts``: Numba's cache does not see a change to
+    a callee, so after editing this function clear ``__pycache__``."""
     out = np.zeros(indptr.shape[0] - 1)
     for j in range(indptr.shape[0] - 1):
         vj = v[j]
@@ -97,7 +99,8 @@ def _csc_matvec(indptr, indices, data, v):
 
 @njit(cache=True)
 def _diagonal_entry(indptr, indices, data, j):
-    """A_jj of a CSC matrix whose rows are sorted within each column (0 if not stored)."""
+    """A_jj of a CSC matrix whose rows are sorted within each column (0 if not stored). Called
+    by the cached ``minimize_modes._pin_parts``: after editing it clear ``__pycache__``."""
     for p in range(indptr[j], indptr[j + 1]):
         if indices[p] >= j:
             return data[p] if indices[p] == j else 0.0
@@ -124,7 +127,8 @@ def _abs_weighted_row_max(indptr, indices, data, u):
 @njit(cache=True)
 def _abs_row_max_ulp(indptr, indices, data, x):
     """:func:`_abs_weighted_row_max` with u = ``np.spacing(np.abs(x)).ravel()``, computed here
-    (spacing is exact: the same u)."""
+    (spacing is exact: the same u for every finite x; at an infinite one Numba's NaN carries
+    the sign bit, NumPy's not, and the maximum is NaN either way)."""
     xf = x.ravel()
     u = np.empty(xf.shape[0])
     for i in range(xf.shape[0]):
@@ -140,6 +144,8 @@ def unsigned_view(index: np.ndarray) -> np.ndarray:
     contiguous first): the same numbers, read by a kernel without Numba's wrap-around check of
     a signed index (:attr:`crumple.linalg._Symbolic.unsigned`)."""
     index = np.ascontiguousarray(index)
+    if index.dtype.kind not in "iu":
+        raise TypeError(f"an index array must hold integers, got {index.dtype}")
     return index.view(_UNSIGNED[index.dtype.itemsize])
 
 

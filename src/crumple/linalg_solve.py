@@ -306,7 +306,8 @@ def _row_positions(old, new, old_value, new_value):
     """For every row of ``new``, the row of ``old`` equal to it (both integer arrays of the
     same width), or -1: exact, rows with equal hashes compared entry by entry. With values
     (float arrays of the rows' shapes; empty: not compared) the rows of values must be equal
-    too."""
+    too. Called by the cached ``minimize_barriers._merge``: Numba's cache does not see a
+    change to a callee, so after editing this function clear ``__pycache__``."""
     w = old.shape[1]
     values = old_value.shape[0] > 0
     hashes = _row_hashes(old)

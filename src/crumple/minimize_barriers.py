@@ -121,6 +121,10 @@ def _masked(st, rows):
     return index, value, offset, stiff
 
 
+#: The dtypes of a listing's arrays: index, value, offset, stiffness.
+_TYPES = (np.int64, np.float64, np.float64, np.float64)
+
+
 def _merged_rows(rows, more):
     """The springs of ``rows`` and those of ``more`` not among them, and whether any was added.
     Both listings are made at the same point, so a spring is known by its row of ``index``."""
@@ -131,9 +135,6 @@ def _merged_rows(rows, more):
         *(np.ascontiguousarray(a, dtype=t) for a, t in zip(more, _TYPES, strict=True)),
     )  # fmt: skip
     return ((index, value, offset, stiff) if grown else rows), grown
-
-
-_TYPES = (np.int64, np.float64, np.float64, np.float64)
 
 
 @njit(cache=True)
