@@ -213,12 +213,11 @@ def _put_block(rows, cols, vals, m, nodes, block):
                         vals[rows[m]] += block[2 * a + u, 2 * b + v]
                         m += 1
         return m
+    _put_keys(rows, cols, m, nodes, p)
     for a in range(p):
         for b in range(p):
             for u in range(2):
                 for v in range(2):
-                    rows[m] = 2 * nodes[a] + u
-                    cols[m] = 2 * nodes[b] + v
                     vals[m] = block[2 * a + u, 2 * b + v]
                     m += 1
     return m

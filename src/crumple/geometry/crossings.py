@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit
 
 from ._input import _as_positions
-from .cells import CROWD, _segment_pairs
+from .cells import CROWD, _segment_boxes, _segment_pairs
 
 # Shewchuk's bound for orient2d: a float determinant larger than this (times the sum of the
 # magnitudes of its two products) has the right sign. eps = 2**-53 is the unit round-off.
@@ -244,15 +244,7 @@ def _sweep_pairs(pos):
         if not (np.isfinite(pos[k, 0]) and np.isfinite(pos[k, 1])):
             return np.full((1, 2), -1, dtype=np.int64)
     n = pos.shape[0] - 1
-    lox = np.empty(n)
-    hix = np.empty(n)
-    loy = np.empty(n)
-    hiy = np.empty(n)
-    for i in range(n):
-        lox[i] = min(pos[i, 0], pos[i + 1, 0])
-        hix[i] = max(pos[i, 0], pos[i + 1, 0])
-        loy[i] = min(pos[i, 1], pos[i + 1, 1])
-        hiy[i] = max(pos[i, 1], pos[i + 1, 1])
+    lox, loy, hix, hiy = _segment_boxes(pos, 0.0)
     order = np.argsort(lox)
     out = np.empty((4 * n + 16, 2), dtype=np.int64)
     m = 0
