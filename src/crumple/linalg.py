@@ -245,10 +245,9 @@ class _Symbolic:
         if self._unsigned is None:
             names = ("src", "perm", "ap", "ai", "rp", "rc", "rpos", "lp", "ai_l")
             self._unsigned = {
-                ("li" if k == "ai_l" else k): np.ascontiguousarray(getattr(self, k),
-                                                                   dtype=np.int64).view(np.uint64)
+                ("li" if k == "ai_l" else k): unsigned_view(np.asarray(getattr(self, k), np.int64))
                 for k in names
-            }  # fmt: skip
+            }
             u = self._unsigned
             u["factor"] = (self.n, u["ap"], u["ai"], u["rp"], u["rc"], u["rpos"], u["lp"], u["li"])
         return self._unsigned
@@ -398,7 +397,7 @@ class Factorization:
         u = sym.unsigned
         try:
             s, converged, active, slot, cols = _spring_solve(
-                sym.n, u["lp"], u["li"], self._lx, self._d, u["perm"], p0, index.view(np.uint64),
+                sym.n, u["lp"], u["li"], self._lx, self._d, u["perm"], p0, unsigned_view(index),
                 value,
                 np.ascontiguousarray(offset, dtype=np.float64),
                 np.ascontiguousarray(stiffness, dtype=np.float64), int(rounds), float(window),
