@@ -29,7 +29,6 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
-from threadpoolctl import threadpool_limits
 
 from .energy import DENSE_LIMIT, EnergyTerms
 from .feed import Channel, FedWireEnergy
@@ -37,7 +36,7 @@ from .geometry import disc_exit_fraction, has_crossings, max_safe_fraction
 from .linalg import CSC, LDLT, pin_rows
 from .minimize import MinimizeResult, newton
 from .model import Wire
-from .protocol import DEFAULT_MAXITER, STABILITY_TOL, node_lengths
+from .protocol import DEFAULT_MAXITER, STABILITY_TOL, node_lengths, one_blas_thread
 
 __all__ = [
     "Injection",
@@ -316,7 +315,7 @@ def run_injection(
     """
     injection = Injection() if injection is None else injection
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _Injector(wire, injection, rng).run(progress)
 
 
