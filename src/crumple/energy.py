@@ -281,14 +281,14 @@ class WireEnergy:
         if self._pattern is None:  # the pattern of these pairs: their triplets' keys sorted
             rows, cols = _triplet_keys(x.shape[0], ks, js, math.isfinite(self._radius))
             self._pattern = (ks, js, *_csc_pattern(rows, cols, x.size))
-        _, _, indptr, indices, where = self._pattern
+        _, _, indptr, indices, where, unsigned = self._pattern
         w = self.wire
         data = _hessian_values(  # the triplets scattered, bit for bit; where unsigned
             where, indices.shape[0], x, w.k_b, self._s, self._tp, self.rest_angles,
             w.k_s, w.rest_length, self.lam, self.weights, ks, js, w.hard_core,
             w.hard_core_energy, project_contacts, project_bending, self._radius,
         )  # fmt: skip
-        return CSC(data, indices, indptr)
+        return CSC(data, indices, indptr, unsigned=unsigned)
 
     def hessian_action(self, x, v) -> np.ndarray:
         """The exact Hessian times ``v`` (over ``x.ravel()``), in element form: flat (x.size,).
@@ -322,10 +322,10 @@ class WireEnergy:
         factorisation keeps its symbolic analysis) is kept whenever it holds every entry of
         the new one, the entries of pairs that left it staying explicit zeros. The chain's
         triplets add to the entries they did; only the pairs' blocks are looked up."""
-        ks0, _, indptr, indices, where = self._pattern
+        ks0, _, indptr, indices, where, unsigned = self._pattern
         head = where[: where.shape[0] - 36 * ks0.shape[0]]
-        new, held = _pair_blocks_where(unsigned_view(indptr), unsigned_view(indices), head, ks, js)
-        return (ks, js, indptr, indices, new) if held else None
+        new, held = _pair_blocks_where(*unsigned, head, ks, js)
+        return (ks, js, indptr, indices, new, unsigned) if held else None
 
     def touching(self, x) -> bool:
         """Whether some node is inside the hard core of a segment at ``x`` (a contact acts):
@@ -397,10 +397,13 @@ def _projection(project_contacts) -> int:
 
 
 def _csc_pattern(rows, cols, ndof):
-    """CSC pattern (indptr, indices) of the triplets, and the entry each triplet adds to."""
+    """CSC pattern (indptr, indices) of the triplets, the entry each triplet adds to, and
+    (indptr, indices) as the unsigned views the kernels read (:attr:`crumple.linalg.CSC.unsigned`).
+    """
     indptr, indices, where = _csc_pattern_kernel(unsigned_view(rows), unsigned_view(cols), ndof)
     index = np.int32 if indices.shape[0] < 2**31 - 1 else np.int64
-    return indptr.astype(index), indices.astype(index), unsigned_view(where)
+    indptr, indices = indptr.astype(index), indices.astype(index)
+    return indptr, indices, unsigned_view(where), (unsigned_view(indptr), unsigned_view(indices))
 
 
 def energy_terms(wire: Wire, positions, lam: float, *, rest_angles=None) -> EnergyTerms:

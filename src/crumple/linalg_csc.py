@@ -167,12 +167,14 @@ class CSC:
     __slots__ = ("_scipy", "_unsigned", "data", "indices", "indptr", "shape")
     format = "csc"
 
-    def __init__(self, data, indices, indptr):
+    def __init__(self, data, indices, indptr, *, unsigned=None):
+        # unsigned: None, or the caller's (indptr, indices) as unsigned views (unsigned_view)
+        # of these very arrays, kept with their pattern (:attr:`unsigned`)
         self.data, self.indices, self.indptr = data, indices, indptr
         n = indptr.shape[0] - 1
         self.shape = (n, n)
         self._scipy = None
-        self._unsigned = None
+        self._unsigned = unsigned
 
     @property
     def unsigned(self) -> tuple[np.ndarray, np.ndarray]:
