@@ -755,6 +755,57 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
     assert raw.tocsc() is raw.tocsc() and raw.nnz == a.nnz
 
 
+def _reference_analysis(a):
+    """The analysis without a candidate as the kernels' composition: RCM and the natural
+    order each permuted and counted in full, the natural kept on a tie, then its row patterns."""
+    from crumple.linalg import _etree, _permuted_upper, _rcm, _row_patterns
+
+    n = a.shape[0]
+    best = None
+    for perm in (_rcm(a), np.arange(n)):
+        ap, ai, src = _permuted_upper(a, perm)
+        parent, lnz, total = _etree(n, ap, ai)
+        if best is None or total <= best[-1]:
+            best = (perm, ap, ai, src, parent, lnz, total)
+    perm, ap, ai, src, parent, lnz, total = best
+    lp = np.r_[0, np.cumsum(lnz)]
+    return (perm, ap, ai, src, parent, lp, *_row_patterns(n, ap, ai, parent, lp)), total
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 120), extra=st.floats(0.0, 0.3),
+       wide=st.booleans(), shuffle=st.booleans())  # fmt: skip
+def test_the_analysis_in_one_kernel_is_the_composition_of_its_steps(seed, n, extra, wide,
+                                                                    shuffle):  # fmt: skip
+    """``_Symbolic`` without a candidate (one kernel: RCM, the natural order counted on A
+    itself, row patterns) gives the arrays of the steps composed, on chain bands with random
+    contacts (the natural order wins on most) and on the same with their unknowns shuffled
+    (RCM wins on most), for int32 and int64 indices."""
+    from crumple.linalg import _Symbolic
+
+    rng = np.random.default_rng(seed)
+    band = min(3, n - 1)
+    a = sp.diags([np.ones(n - abs(k)) for k in range(-band, band + 1)],
+                 list(range(-band, band + 1))).tolil()  # fmt: skip
+    for _ in range(int(extra * n)):
+        i, j = rng.integers(0, n, 2)
+        a[i, j] = a[j, i] = 1.0
+    a = a.tocsc()
+    if shuffle:
+        order = rng.permutation(n)
+        a = a[order][:, order].tocsc()
+    a.sort_indices()
+    if wide:
+        a.indptr, a.indices = a.indptr.astype(np.int64), a.indices.astype(np.int64)
+    want, total = _reference_analysis(a)
+    sym = _Symbolic(a)
+    got = (sym.perm, sym.ap, sym.ai, sym.src, sym.parent, sym.lp, sym.rp, sym.rc, sym.rpos,
+           sym.ai_l)  # fmt: skip
+    for w, g in zip(want, got, strict=True):
+        np.testing.assert_array_equal(g, w)
+    assert sym.l_nnz == total
+
+
 @settings(max_examples=200, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 300), extra=st.floats(0.0, 0.5),
        cut=st.booleans(), blocks=st.integers(1, 4))  # fmt: skip

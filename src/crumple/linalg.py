@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from numba import njit
 
 from .linalg_csc import CSC, dense_csc, pin_rows, unsigned_view
-from .linalg_order import _rcm, nested_dissection
+from .linalg_order import _by_degree, _degrees, _rcm, _rcm_kernel, nested_dissection
 from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
 
 __all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "forget_analyses", "pin_rows"]
@@ -47,7 +47,9 @@ __all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "forget_analyses", "pin_
 def _etree(n, ap, ai, budget=-1):
     """Elimination tree and the number of nonzeros of every column of L (QDLDL_etree), and
     their total; with ``budget`` >= 0, the walk stops as soon as the total exceeds it (the
-    work is O(nnz(L)): an order with much fill costs much to count) and the total is -1."""
+    work is O(nnz(L)): an order with much fill costs much to count) and the total is -1.
+    Entries below the diagonal are skipped, so a whole symmetric CSC pattern gives its
+    natural order's tree."""
     work = np.zeros(n, dtype=np.int64)
     lnz = np.zeros(n, dtype=np.int64)
     parent = np.full(n, -1, dtype=np.int64)
@@ -55,7 +57,9 @@ def _etree(n, ap, ai, budget=-1):
     for j in range(n):
         work[j] = j
         for p in range(ap[j], ap[j + 1]):
-            i = ai[p]
+            i = np.int64(ai[p])  # an unsigned index (A's own pattern) walks as a signed one
+            if i > j:
+                continue
             while work[i] != j:
                 if parent[i] == -1:
                     parent[i] = j
@@ -217,11 +221,20 @@ class _Symbolic:
         n = a.shape[0]
         self.n = n
         self.indptr, self.indices = a.indptr, a.indices
+        self._unsigned = None
+        if candidate is None:  # RCM and the natural order, in one kernel
+            indptr, indices = unsigned_view(a.indptr), unsigned_view(a.indices)
+            degree = _degrees(n, indptr, indices)
+            found = _analysis(n, indptr, indices, degree, _by_degree(degree))
+            self.perm, self.ap, self.ai, self.src, self.parent, self.lp = found[:6]
+            self.rp, self.rc, self.rpos, self.ai_l = found[6:]
+            self.l_nnz = int(self.lp[n])
+            return
         # the order with the fewest nonzeros in L, the later on a tie, of a caller's candidate
         # (a nested dissection), RCM and the natural order, counted in that order so that a
         # later count (all fill, for the natural order of a packed wire) stops once beaten
         best = None
-        for perm in ((candidate,) if candidate is not None else ()) + (_rcm(a), np.arange(n)):
+        for perm in (candidate, _rcm(a), np.arange(n)):
             ap, ai, src = _permuted_upper(a, perm)
             parent, lnz, total = _etree(n, ap, ai, -1 if best is None else best[-1])
             if total >= 0:
@@ -230,7 +243,8 @@ class _Symbolic:
         self.lp = np.zeros(n + 1, dtype=np.int64)
         np.cumsum(lnz, out=self.lp[1:])
         self.l_nnz = total
-        self._unsigned = None
+        self.rp, self.rc, self.rpos, self.ai_l = _row_patterns(n, self.ap, self.ai, self.parent,
+                                                               self.lp)  # fmt: skip
 
     @property
     def unsigned(self) -> dict:
@@ -311,6 +325,30 @@ def _permuted_upper_kernel(n, indptr, indices, perm):
             ai[f + 1] = r
             src[f + 1] = q
     return ap, ai, src
+
+
+@njit(cache=True)
+def _analysis(n, indptr, indices, degree, by_degree):
+    """The analysis of a pattern without a caller's candidate order, in one call: of SciPy's
+    reverse Cuthill–McKee (from the ``degree`` of :func:`_degrees` and its order
+    ``by_degree``, :func:`_by_degree`) and the natural order, the
+    one with fewer nonzeros in L (the natural on a tie; its count stops once beaten), its
+    permuted upper pattern, elimination tree, ``lp`` and row patterns. The same arrays as
+    :func:`_rcm`, :func:`_permuted_upper`, :func:`_etree` and :func:`_row_patterns` called in
+    turn. Returns (perm, ap, ai, src, parent, lp, rp, rc, rpos, li)."""
+    perm = _rcm_kernel(n, indptr, indices, degree, by_degree)
+    ap, ai, src = _permuted_upper_kernel(n, indptr, indices, perm)
+    parent, lnz, total = _etree(n, ap, ai, -1)
+    # the natural order's upper pattern is A's own (rows sorted): counted on A, built if it wins
+    parent2, lnz2, total2 = _etree(n, indptr, indices, total)
+    if total2 >= 0:
+        perm, parent, lnz = np.arange(n), parent2, lnz2
+        ap, ai, src = _permuted_upper_kernel(n, indptr, indices, perm)
+    lp = np.zeros(n + 1, dtype=np.int64)
+    for k in range(n):
+        lp[k + 1] = lp[k] + lnz[k]
+    rp, rc, rpos, li = _row_patterns(n, ap, ai, parent, lp)
+    return perm, ap, ai, src, parent, lp, rp, rc, rpos, li
 
 
 class Factorization:
@@ -516,9 +554,6 @@ class LDLT:
             sym = _recall(a) if self._shared else None
             if sym is None:
                 sym = _Symbolic(a, self._candidate(a))
-                sym.rp, sym.rc, sym.rpos, sym.ai_l = _row_patterns(
-                    sym.n, sym.ap, sym.ai, sym.parent, sym.lp
-                )
                 if self._shared:
                     _remember(sym)
             self._sym = sym

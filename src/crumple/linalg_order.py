@@ -19,10 +19,13 @@ def _rcm(a) -> np.ndarray:
     indptr = np.asarray(a.indptr, dtype=np.int64)
     indices = np.asarray(a.indices, dtype=np.int64)
     degree = _degrees(n, indptr, indices)
-    # argsort in SciPy's index dtype: NumPy's (SIMD) sorts need not break ties alike for int32
-    # and int64
-    by_degree = np.argsort(degree.astype(np.int32) if n < 2**31 else degree)
-    return _rcm_kernel(n, indptr, indices, degree, by_degree)
+    return _rcm_kernel(n, indptr, indices, degree, _by_degree(degree))
+
+
+def _by_degree(degree) -> np.ndarray:
+    """The unknowns by increasing degree, as SciPy's RCM orders them: ``np.argsort`` in SciPy's
+    index dtype (NumPy's SIMD sorts need not break ties alike for int32 and int64)."""
+    return np.argsort(degree.astype(np.int32) if degree.shape[0] < 2**31 else degree)
 
 
 @njit(cache=True)
