@@ -33,7 +33,7 @@ from numba import njit
 
 from .linalg_csc import CSC, dense_csc, pin_rows, unsigned_view
 from .linalg_order import _by_degree, _degrees, _rcm, _rcm_kernel, nested_dissection
-from .linalg_solve import _row_positions, _solve, _spring_solve, _unit_back_solve
+from .linalg_solve import _known_slots, _solve, _spring_solve, _unit_back_solve
 
 __all__ = ["CSC", "LDLT", "Factorization", "dense_csc", "forget_analyses", "pin_rows"]
 
@@ -453,9 +453,8 @@ class Factorization:
         if self._columns is None or index.shape[1:] != self._columns[0].shape[1:]:
             return _NO_SLOT, _NO_COLUMNS
         old_index, old_value, old_slot, cols = self._columns
-        where = _row_positions(old_index, index, old_value, value)
-        slot = np.where(where >= 0, old_slot[where], -1)
-        return (slot, cols) if (slot >= 0).any() else (_NO_SLOT, _NO_COLUMNS)
+        slot, known = _known_slots(old_index, index, old_value, value, old_slot)
+        return (slot, cols) if known else (_NO_SLOT, _NO_COLUMNS)
 
     def negative_direction(self) -> np.ndarray | None:
         """A direction of low curvature: v = Pᵀ L⁻ᵀ e_k, for which vᵀ(A + diag(shift))v = d_k.

@@ -329,3 +329,17 @@ def _row_positions(old, new, old_value, new_value):
                 break
             k += 1
     return out
+
+
+@njit(cache=True)
+def _known_slots(old, new, old_value, new_value, old_slot):
+    """For every row of ``new`` (with its values), the slot ``old_slot`` gives the equal row of
+    ``old`` (:func:`_row_positions`), or -1; and whether any row has one."""
+    where = _row_positions(old, new, old_value, new_value)
+    slot = np.full(where.shape[0], -1, dtype=np.int64)
+    known = False
+    for i in range(where.shape[0]):
+        if where[i] >= 0:
+            slot[i] = old_slot[where[i]]
+            known = known or slot[i] >= 0
+    return slot, known
