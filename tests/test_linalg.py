@@ -773,32 +773,46 @@ def _reference_analysis(a):
 
 
 @settings(max_examples=100, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 120), extra=st.floats(0.0, 0.3),
-       wide=st.booleans(), shuffle=st.booleans())  # fmt: skip
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 120), extra=st.floats(0.0, 0.3),
+       wide=st.booleans(), shuffle=st.booleans(), holes=st.booleans(),
+       blocks=st.integers(1, 3), raw=st.booleans())  # fmt: skip
 def test_the_analysis_in_one_kernel_is_the_composition_of_its_steps(seed, n, extra, wide,
-                                                                    shuffle):  # fmt: skip
+                                                                    shuffle, holes, blocks,
+                                                                    raw):  # fmt: skip
     """``_Symbolic`` without a candidate (one kernel: RCM, the natural order counted on A
     itself, row patterns) gives the arrays of the steps composed, on chain bands with random
     contacts (the natural order wins on most) and on the same with their unknowns shuffled
-    (RCM wins on most), for int32 and int64 indices."""
+    (RCM wins on most), with missing diagonal entries and empty rows, in several components,
+    for int32 and int64 indices, SciPy's matrix and :class:`CSC`."""
     from crumple.linalg import _Symbolic
 
     rng = np.random.default_rng(seed)
-    band = min(3, n - 1)
+    band = max(0, min(3, n - 1))
     a = sp.diags([np.ones(n - abs(k)) for k in range(-band, band + 1)],
-                 list(range(-band, band + 1))).tolil()  # fmt: skip
+                 list(range(-band, band + 1)), shape=(n, n)).tolil()  # fmt: skip
     for _ in range(int(extra * n)):
         i, j = rng.integers(0, n, 2)
         a[i, j] = a[j, i] = 1.0
+    for b in range(1, blocks):  # split the chain into components
+        k = b * n // blocks
+        a[:k, k:] = 0.0
+        a[k:, :k] = 0.0
+    if holes and n:
+        for k in rng.integers(0, n, 1 + n // 10):
+            a[k, k] = 0.0  # a missing diagonal entry
+        k = int(rng.integers(0, n))
+        a[k, :] = 0.0  # an empty row and column
+        a[:, k] = 0.0
     a = a.tocsc()
     if shuffle:
         order = rng.permutation(n)
         a = a[order][:, order].tocsc()
+    a.eliminate_zeros()
     a.sort_indices()
     if wide:
         a.indptr, a.indices = a.indptr.astype(np.int64), a.indices.astype(np.int64)
     want, total = _reference_analysis(a)
-    sym = _Symbolic(a)
+    sym = _Symbolic(CSC(a.data, a.indices, a.indptr) if raw else a)
     got = (sym.perm, sym.ap, sym.ai, sym.src, sym.parent, sym.lp, sym.rp, sym.rc, sym.rpos,
            sym.ai_l)  # fmt: skip
     for w, g in zip(want, got, strict=True):

@@ -214,7 +214,8 @@ _NO_COLUMNS = np.zeros((0, 0))
 
 
 class _Symbolic:
-    """A pattern's fill-reducing order, permuted upper pattern, elimination tree and L's shape."""
+    """A pattern's fill-reducing order, permuted upper pattern, elimination tree, L's shape and
+    row patterns."""
 
     def __init__(self, a: sp.csc_matrix, candidate=None):
         # candidate: None or a permutation of range(n) (order[i], the unknown that goes i-th)
@@ -255,7 +256,7 @@ class _Symbolic:
         N = 100 and 1.9× at N = 1000, the same operations in the same order, so the same bits
         (docs/performance.md, "Unsigned indices"). ``factor`` is the tuple of those the
         factorisation's kernel takes after its data (n, ap, ai, rp, rc, rpos, lp, li). Made
-        once, after the row patterns are set (:meth:`LDLT.symbolic` sets them at once)."""
+        once, at the first use (``__init__`` sets every array it views)."""
         if self._unsigned is None:
             names = ("src", "perm", "ap", "ai", "rp", "rc", "rpos", "lp", "ai_l")
             self._unsigned = {
@@ -339,7 +340,7 @@ def _analysis(n, indptr, indices, degree, by_degree):
     perm = _rcm_kernel(n, indptr, indices, degree, by_degree)
     ap, ai, src = _permuted_upper_kernel(n, indptr, indices, perm)
     parent, lnz, total = _etree(n, ap, ai, -1)
-    # the natural order's upper pattern is A's own (rows sorted): counted on A, built if it wins
+    # the natural order's upper pattern is A's own: counted on A, built only where it wins
     parent2, lnz2, total2 = _etree(n, indptr, indices, total)
     if total2 >= 0:
         perm, parent, lnz = np.arange(n), parent2, lnz2

@@ -406,9 +406,11 @@ _BLAS: list[ThreadpoolController] = []  # the controller, made at the first use
 
 
 def one_blas_thread():
-    """A context in which the BLAS libraries loaded when it was first entered use one thread
-    (``threadpoolctl``). The controller is made once per process: making it reads the
-    process's memory map, 0.8 ms, 0.4 % of a default N = 100 ramp (12 µs once made)."""
+    """A context in which the BLAS libraries use one thread (``threadpoolctl``): those loaded
+    when it was first called (NumPy's and SciPy's OpenBLAS are loaded with ``crumple``; a BLAS
+    a caller loads later is left alone). The controller is made once per process (a forked
+    worker reuses its parent's): making it reads the process's memory map, 0.8 ms, 0.4 % of a
+    default N = 100 ramp (13 µs once made)."""
     if not _BLAS:
         _BLAS.append(ThreadpoolController())
     return _BLAS[0].limit(limits=1, user_api="blas")
