@@ -3,7 +3,7 @@
     python benchmarks/bench_unsigned.py [N] [ramps] [curved]
 
 The factorisation, the solves, the springs' step, the rank-one modifications and the Hessian's
-assembly read their index arrays as unsigned views (``crumple.linalg._Symbolic.unsigned``):
+assembly read their index arrays as unsigned views (``crumple.linalg_symbolic._Symbolic.unsigned``):
 Numba checks a signed index for wrap-around at every access, an unsigned one not. Here the
 same ramp is run ``ramps`` times each way, alternated: with the views (the engine as it is) and
 with the signed arrays (as before, through wrappers that view them back), asserting that the

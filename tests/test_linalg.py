@@ -758,7 +758,8 @@ def test_raw_csc_gives_the_bits_of_the_scipy_matrix(seed, n, density):
 def _reference_analysis(a):
     """The analysis without a candidate as the kernels' composition: RCM and the natural
     order each permuted and counted in full, the natural kept on a tie, then its row patterns."""
-    from crumple.linalg import _etree, _permuted_upper, _rcm, _row_patterns
+    from crumple.linalg_order import _rcm
+    from crumple.linalg_symbolic import _etree, _permuted_upper, _row_patterns
 
     n = a.shape[0]
     best = None
@@ -784,7 +785,7 @@ def test_the_analysis_in_one_kernel_is_the_composition_of_its_steps(seed, n, ext
     contacts (the natural order wins on most) and on the same with their unknowns shuffled
     (RCM wins on most), with missing diagonal entries and empty rows, in several components,
     for int32 and int64 indices, SciPy's matrix and :class:`CSC`."""
-    from crumple.linalg import _Symbolic
+    from crumple.linalg_symbolic import _Symbolic
 
     rng = np.random.default_rng(seed)
     band = max(0, min(3, n - 1))
@@ -829,7 +830,7 @@ def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut, blocks):
     entries."""
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-    from crumple.linalg import _rcm
+    from crumple.linalg_order import _rcm
 
     rng = np.random.default_rng(seed)
     band = min(5, n - 1)

@@ -142,7 +142,7 @@ _UNSIGNED = {1: np.uint8, 2: np.uint16, 4: np.uint32, 8: np.uint64}
 def unsigned_view(index: np.ndarray) -> np.ndarray:
     """An array of non-negative integers as an unsigned view of the same memory (made
     contiguous first): the same numbers, read by a kernel without Numba's wrap-around check of
-    a signed index (:attr:`crumple.linalg._Symbolic.unsigned`)."""
+    a signed index (:attr:`crumple.linalg_symbolic._Symbolic.unsigned`)."""
     index = np.ascontiguousarray(index)
     if index.dtype.kind not in "iu":
         raise TypeError(f"an index array must hold integers, got {index.dtype}")
@@ -180,7 +180,7 @@ class CSC:
     def unsigned(self) -> tuple[np.ndarray, np.ndarray]:
         """(indptr, indices) as unsigned views of the same memory, for the kernels: Numba
         checks a signed index for wrap-around at every access, an unsigned one not (the same
-        numbers, so the same results; :attr:`crumple.linalg._Symbolic.unsigned`)."""
+        numbers, so the same results; :attr:`crumple.linalg_symbolic._Symbolic.unsigned`)."""
         if self._unsigned is None:
             self._unsigned = (unsigned_view(self.indptr), unsigned_view(self.indices))
         return self._unsigned

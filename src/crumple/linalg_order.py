@@ -45,8 +45,8 @@ def _degrees(n, indptr, indices):
 def _rcm_kernel(n, indptr, indices, degree, by_degree):
     """Cuthill–McKee by breadth-first search from ``by_degree``'s first unvisited node of every
     component, each node's new neighbours sorted by degree (stable insertion sort), reversed.
-    Called by the cached ``linalg._analysis``: Numba's cache does not see a change to a callee,
-    so after editing this function clear ``__pycache__``."""
+    Called by the cached ``linalg_symbolic._analysis``: Numba's cache does not see a change to
+    a callee, so after editing this function clear ``__pycache__``."""
     order = np.empty(n, dtype=np.int64)
     seen = np.zeros(n, dtype=np.bool_)
     key = np.empty(n, dtype=np.int64)

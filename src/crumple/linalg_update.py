@@ -99,7 +99,7 @@ def modified(f: Factorization, index, value, sigma, chosen) -> Factorization | N
     pinv = inverse_order(sym)
     lx, d = f._lx.copy(), f._d.copy()
     w = np.zeros(sym.n)
-    u = sym.unsigned  # the kernel's index arrays unsigned (crumple.linalg._Symbolic.unsigned)
+    u = sym.unsigned  # the kernel's index arrays unsigned (linalg_symbolic._Symbolic.unsigned)
     for i in np.flatnonzero(chosen):
         if not _modify(u["lp"], u["li"], lx, d, sym.parent, pinv, index[i], value[i],
                        float(sigma[i]), w, CANCELLATION):  # fmt: skip
