@@ -699,8 +699,29 @@ def test_refactorised_spring_step_from_the_segment_sheds_what_the_start_overshot
         assert s == pytest.approx(np.ones(n), rel=1e-12)
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(0, 80), k=st.integers(0, 80),
+       w=st.integers(1, 6), values=st.booleans())  # fmt: skip
+def test_row_positions_finds_the_first_equal_row_directly_and_by_hash(seed, m, k, w, values):
+    """linalg_solve._row_positions against a scan, with repeated rows (the first of them is
+    found) and, with values, rows of equal indices but unequal values; up to 1024 pairs of rows
+    it compares them directly, above by hash: sizes up to 80 × 80 take both paths."""
+    from crumple.linalg_solve import _row_positions
+
+    rng = np.random.default_rng(seed)
+    old = rng.integers(0, 3, (m, w))
+    new = np.concatenate([old[rng.integers(0, m, k // 2)] if m else old[:0],
+                          rng.integers(0, 3, (k - k // 2 if m else k, w))])  # fmt: skip
+    old_value = rng.integers(0, 2, (m, w)).astype(float) if values else np.empty((0, 0))
+    new_value = rng.integers(0, 2, (k, w)).astype(float) if values else np.empty((0, 0))
+    want = [next((r for r in range(m) if (old[r] == new[i]).all()
+                  and (not values or (old_value[r] == new_value[i]).all())), -1)
+            for i in range(k)]  # fmt: skip
+    assert _row_positions(old, new, old_value, new_value).tolist() == want
+
+
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), m=st.integers(0, 30), k=st.integers(0, 30),
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(0, 80), k=st.integers(0, 80),
        w=st.integers(1, 6))  # fmt: skip
 def test_new_rows_are_exactly_the_rows_not_listed_before(seed, m, k, w):
     """linalg_springs.new_rows (a relisting's springs not in the first listing) against a set

@@ -306,12 +306,21 @@ def _row_positions(old, new, old_value, new_value):
     """For every row of ``new``, the row of ``old`` equal to it (both integer arrays of the
     same width), or -1: exact, rows with equal hashes compared entry by entry. With values
     (float arrays of the rows' shapes; empty: not compared) the rows of values must be equal
-    too. Called by the cached ``minimize_barriers._merge``: Numba's cache does not see a
-    change to a callee, so after editing this function clear ``__pycache__``."""
-    w = old.shape[1]
+    too. Of several equal rows of ``old``, the first. Few rows (at most 1024 pairs of rows) are
+    compared directly, more by hash. Called by the cached ``minimize_barriers._merge`` and
+    ``linalg_springs``' kernels: Numba's cache does not see a change to a callee, so after
+    editing this function clear ``__pycache__``."""
     values = old_value.shape[0] > 0
+    if old.shape[0] * new.shape[0] <= 1024:
+        out = np.full(new.shape[0], -1, dtype=np.int64)
+        for i in range(new.shape[0]):
+            for r in range(old.shape[0]):
+                if _same_row(old, new, old_value, new_value, values, r, i):
+                    out[i] = r
+                    break
+        return out
     hashes = _row_hashes(old)
-    order = np.argsort(hashes)
+    order = np.argsort(hashes, kind="mergesort")  # stable: equal rows met first to last
     sorted_hashes = hashes[order]
     mine = _row_hashes(new)
     out = np.full(new.shape[0], -1, dtype=np.int64)
@@ -319,16 +328,20 @@ def _row_positions(old, new, old_value, new_value):
         k = np.searchsorted(sorted_hashes, mine[i])
         while k < sorted_hashes.shape[0] and sorted_hashes[k] == mine[i]:
             r = order[k]
-            same = True
-            for c in range(w):
-                if old[r, c] != new[i, c] or (values and old_value[r, c] != new_value[i, c]):
-                    same = False
-                    break
-            if same:
+            if _same_row(old, new, old_value, new_value, values, r, i):
                 out[i] = r
                 break
             k += 1
     return out
+
+
+@njit(cache=True)
+def _same_row(old, new, old_value, new_value, values, r, i):
+    """Whether row r of ``old`` is row i of ``new`` (and their values, with ``values``)."""
+    for c in range(old.shape[1]):
+        if old[r, c] != new[i, c] or (values and old_value[r, c] != new_value[i, c]):
+            return False
+    return True
 
 
 @njit(cache=True)
