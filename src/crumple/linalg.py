@@ -14,10 +14,10 @@ each from **one** factorisation:
 The factorisation is the up-looking algorithm of QDLDL (Stellato, Banjac et al., OSQP), written
 in Numba: an elimination tree and column counts once per sparsity pattern (the *symbolic*
 analysis, :mod:`crumple.linalg_symbolic`), then a numeric factorisation per call that only
-fills in values. No pivoting: a
-fill-reducing order is chosen once per pattern, the one with the fewest nonzeros in L among
-the natural order (optimal for a chain: a band), SciPy's reverse Cuthill–McKee and, where the
-caller gives the points the unknowns sit at, a nested dissection of them (a packed wire).
+fills in values. No pivoting: a fill-reducing order is chosen once per pattern, the one with
+the fewest nonzeros in L among the natural order (optimal for a chain: a band), SciPy's
+reverse Cuthill–McKee and, where the caller gives the points the unknowns sit at, a nested
+dissection of them (a packed wire).
 
 A pattern is recognised by the identity of the CSC index arrays of the matrix (or, failing
 that, their contents), so a caller that assembles into a fixed pattern
@@ -50,8 +50,9 @@ def _factor(n, ap, ai, ax, shift, floor, modify, rp, rc, rpos, lp, li, lx, d, fi
             first_value, stop=False):  # fmt: skip
     """Numeric LDLᵀ of A + diag(shift) into (lp, li, lx, d); returns (negative, modified).
 
-    QDLDL's up-looking factorisation with its symbolic part precomputed (:func:`_row_patterns`:
-    the same operations in the same order, without the elimination-tree walks).
+    QDLDL's up-looking factorisation with its symbolic part precomputed
+    (:func:`crumple.linalg_symbolic._row_patterns`: the same operations in the same order,
+    without the elimination-tree walks).
     ``negative`` counts pivots <= 0 as computed (before any modification); with ``modify``
     a pivot below ``floor[k]`` is replaced by max(|d_k|, floor[k]) and counted in ``modified``;
     the first such pivot's index and value go to ``first[0]`` and ``first_value[0]``. With

@@ -290,7 +290,9 @@ SPRING_SINGULAR = 1e-12
 
 @njit(cache=True)
 def _row_hashes(index):
-    """An FNV-style hash of every row of an integer array (wrapping int64 arithmetic)."""
+    """An FNV-style hash of every row of an integer array (wrapping int64 arithmetic). Compiled
+    into the cached ``minimize_barriers._merge`` through :func:`_row_positions`: after editing
+    it clear ``__pycache__``."""
     m, w = index.shape
     out = np.empty(m, dtype=np.int64)
     for i in range(m):
@@ -307,9 +309,9 @@ def _row_positions(old, new, old_value, new_value):
     same width), or -1: exact, rows with equal hashes compared entry by entry. With values
     (float arrays of the rows' shapes; empty: not compared) the rows of values must be equal
     too. Of several equal rows of ``old``, the first. Few rows (at most 1024 pairs of rows) are
-    compared directly, more by hash. Called by the cached ``minimize_barriers._merge`` and
-    ``linalg_springs``' kernels: Numba's cache does not see a change to a callee, so after
-    editing this function clear ``__pycache__``."""
+    compared directly, more by hash. Called by the cached ``minimize_barriers._merge``: Numba's
+    cache does not see a change to a callee, so after editing this function or its callees
+    (:func:`_same_row`, :func:`_row_hashes`) clear ``__pycache__``."""
     values = old_value.shape[0] > 0
     if old.shape[0] * new.shape[0] <= 1024:
         out = np.full(new.shape[0], -1, dtype=np.int64)
@@ -337,7 +339,9 @@ def _row_positions(old, new, old_value, new_value):
 
 @njit(cache=True)
 def _same_row(old, new, old_value, new_value, values, r, i):
-    """Whether row r of ``old`` is row i of ``new`` (and their values, with ``values``)."""
+    """Whether row r of ``old`` is row i of ``new`` (and their values, with ``values``).
+    Compiled into the cached ``minimize_barriers._merge`` through :func:`_row_positions`: after
+    editing it clear ``__pycache__``."""
     for c in range(old.shape[1]):
         if old[r, c] != new[i, c] or (values and old_value[r, c] != new_value[i, c]):
             return False

@@ -3,8 +3,9 @@
 Private. A pattern's fill-reducing order (the natural one, SciPy's reverse Cuthill–McKee or a
 caller's nested dissection, whichever gives L the fewest nonzeros), the upper triangle of the
 permuted pattern with where each entry comes from, the elimination tree and the column counts
-of L (QDLDL's), and the row patterns the numeric factorisation (:func:`crumple.linalg._factor`)
-walks. Without a caller's order the whole analysis is one kernel (:func:`_analysis`).
+of L (QDLDL's), and the row patterns the numeric factorisation
+(:func:`crumple.linalg._factor`) walks. Without a caller's order the whole analysis is one
+kernel (:func:`_analysis`).
 """
 
 from __future__ import annotations
@@ -48,10 +49,11 @@ def _etree(n, ap, ai, budget=-1):
 
 @njit(cache=True)
 def _row_patterns(n, ap, ai, parent, lp):
-    """The symbolic part of :func:`_factor`, done once per pattern: for every row k of L, the
-    columns c of its nonzeros in the order the numeric factorisation visits them (the
-    topological order of QDLDL's elimination-tree walk, ``rc[rp[k]:rp[k + 1]]``), where each
-    l_kc goes in L (``rpos``), and L's row indices ``li``. Returns (rp, rc, rpos, li)."""
+    """The symbolic part of :func:`crumple.linalg._factor`, done once per pattern: for every
+    row k of L, the columns c of its nonzeros in the order the numeric factorisation visits
+    them (the topological order of QDLDL's elimination-tree walk, ``rc[rp[k]:rp[k + 1]]``),
+    where each l_kc goes in L (``rpos``), and L's row indices ``li``. Returns (rp, rc, rpos,
+    li)."""
     marker = np.zeros(n, dtype=np.bool_)
     yidx = np.empty(n, dtype=np.int64)
     buf = np.empty(n, dtype=np.int64)
