@@ -1,5 +1,5 @@
-"""The nested dissection of the unknowns' points (``crumple.linalg_order.nested_dissection``)
-and its use as a candidate fill-reducing order of the sparse LDLᵀ."""
+"""The fill-reducing orders of ``crumple.linalg_order``: the nested dissection of the unknowns'
+points and its use as a candidate order of the sparse LDLᵀ, and reverse Cuthill–McKee."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from crumple.linalg import LDLT
+from crumple.linalg import CSC, LDLT
 from crumple.linalg_order import nested_dissection
 
 
@@ -164,3 +164,41 @@ def test_points_that_do_not_hold_the_unknowns_are_refused_or_skipped():
     plain = LDLT().symbolic(a).perm
     np.testing.assert_array_equal(LDLT(points=lambda: pts[:-1]).symbolic(a).perm, plain)
     np.testing.assert_array_equal(LDLT(points=lambda: None).symbolic(a).perm, plain)
+
+
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 300), extra=st.floats(0.0, 0.5),
+       cut=st.booleans(), blocks=st.integers(1, 4))  # fmt: skip
+def test_reverse_cuthill_mckee_is_scipys_order(seed, n, extra, cut, blocks):
+    """The compiled RCM gives SciPy's permutation exactly (so the iterates do not change) on
+    chain bands with random contacts, several components, isolated nodes and missing diagonal
+    entries."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    from crumple.linalg_order import _rcm
+
+    rng = np.random.default_rng(seed)
+    band = min(5, n - 1)
+    a = sp.diags([np.ones(n - abs(k)) for k in range(-band, band + 1)],
+                 list(range(-band, band + 1))).tolil()  # fmt: skip
+    for _ in range(int(extra * n)):
+        i, j = rng.integers(0, n, 2)
+        a[i, j] = a[j, i] = 1.0
+    for b in range(1, blocks):  # split the chain into components
+        k = b * n // blocks
+        if 0 < k < n:
+            a[:k, k:] = 0.0
+            a[k:, :k] = 0.0
+    if cut:
+        k = int(rng.integers(0, n))
+        a[k, :] = 0.0
+        a[:, k] = 0.0
+        a[k, k] = float(rng.random() < 0.5)
+        j = int(rng.integers(0, n))  # a connected node without its diagonal entry
+        a[j, j] = 0.0
+    a = a.tocsc()
+    a.eliminate_zeros()
+    a.sort_indices()
+    expected = reverse_cuthill_mckee(a.tocsr(), symmetric_mode=True)
+    np.testing.assert_array_equal(_rcm(a), expected)
+    np.testing.assert_array_equal(_rcm(CSC(a.data, a.indices, a.indptr)), expected)
