@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from numba import njit
 
 from .linalg_csc import unsigned_view
-from .linalg_order import _by_degree, _degrees, _rcm, _rcm_kernel
+from .linalg_order import _by_degree, _degrees, _rcm_kernel
 
 
 @njit(cache=True)
@@ -107,29 +107,22 @@ class _Symbolic:
         self.n = n
         self.indptr, self.indices = a.indptr, a.indices
         self._unsigned = None
-        if candidate is None:  # RCM and the natural order, in one kernel
-            indptr, indices = unsigned_view(a.indptr), unsigned_view(a.indices)
-            degree = _degrees(n, indptr, indices)
-            found = _analysis(n, indptr, indices, degree, _by_degree(degree))
-            self.perm, self.ap, self.ai, self.src, self.parent, self.lp = found[:6]
-            self.rp, self.rc, self.rpos, self.ai_l = found[6:]
-            self.l_nnz = int(self.lp[n])
-            return
         # the order with the fewest nonzeros in L, the later on a tie, of a caller's candidate
         # (a nested dissection), RCM and the natural order, counted in that order so that a
         # later count (all fill, for the natural order of a packed wire) stops once beaten
-        best = None
-        for perm in (candidate, _rcm(a), np.arange(n)):
-            ap, ai, src = _permuted_upper(a, perm)
-            parent, lnz, total = _etree(n, ap, ai, -1 if best is None else best[-1])
-            if total >= 0:
-                best = (perm, ap, ai, src, parent, lnz, total)
-        self.perm, self.ap, self.ai, self.src, self.parent, lnz, total = best
-        self.lp = np.zeros(n + 1, dtype=np.int64)
-        np.cumsum(lnz, out=self.lp[1:])
-        self.l_nnz = total
-        self.rp, self.rc, self.rpos, self.ai_l = _row_patterns(n, self.ap, self.ai, self.parent,
-                                                               self.lp)  # fmt: skip
+        budget, mine = -1, None
+        if candidate is not None:
+            ap, ai, src = _permuted_upper(a, candidate)
+            parent, lnz, budget = _etree(n, ap, ai)
+            mine = (np.asarray(candidate, dtype=np.int64), ap, ai, src, parent, lnz)
+        indptr, indices = unsigned_view(a.indptr), unsigned_view(a.indices)
+        degree = _degrees(n, indptr, indices)
+        won, *found = _analysis(n, indptr, indices, degree, _by_degree(degree), budget)
+        if not won:  # the candidate's
+            found = [*mine[:5], *_completed(n, mine[1], mine[2], mine[4], mine[5])]
+        self.perm, self.ap, self.ai, self.src, self.parent, self.lp = found[:6]
+        self.rp, self.rc, self.rpos, self.ai_l = found[6:]
+        self.l_nnz = int(self.lp[n])
 
     @property
     def unsigned(self) -> dict:
@@ -213,24 +206,40 @@ def _permuted_upper_kernel(n, indptr, indices, perm):
 
 
 @njit(cache=True)
-def _analysis(n, indptr, indices, degree, by_degree):
-    """The analysis of a pattern without a caller's candidate order, in one call: of SciPy's
-    reverse Cuthill–McKee (from the ``degree`` of :func:`_degrees` and its order
-    ``by_degree``, :func:`_by_degree`) and the natural order, the
-    one with fewer nonzeros in L (the natural on a tie; its count stops once beaten), its
-    permuted upper pattern, elimination tree, ``lp`` and row patterns. The same arrays as
-    :func:`_rcm`, :func:`_permuted_upper`, :func:`_etree` and :func:`_row_patterns` called in
-    turn. Returns (perm, ap, ai, src, parent, lp, rp, rc, rpos, li)."""
+def _analysis(n, indptr, indices, degree, by_degree, budget):
+    """The analysis of a pattern by SciPy's reverse Cuthill–McKee (from the ``degree`` of
+    :func:`_degrees` and its order ``by_degree``, :func:`_by_degree`) or the natural order,
+    whichever gives L fewer nonzeros (the natural on a tie), in one call: its order, permuted
+    upper pattern, elimination tree, ``lp`` and row patterns. With ``budget`` >= 0 (a caller's
+    candidate's count), only an order with at most that many (the later on a tie, as counted):
+    the result's first entry says whether one had, the arrays are empty where none had. Each
+    count stops once beaten. The same arrays as :func:`_rcm`, :func:`_permuted_upper`,
+    :func:`_etree` and :func:`_row_patterns` called in turn. Returns (won, perm, ap, ai, src,
+    parent, lp, rp, rc, rpos, li)."""
     perm = _rcm_kernel(n, indptr, indices, degree, by_degree)
     ap, ai, src = _permuted_upper_kernel(n, indptr, indices, perm)
-    parent, lnz, total = _etree(n, ap, ai, -1)
+    parent, lnz, total = _etree(n, ap, ai, budget)
+    won = total >= 0
+    if won:
+        budget = total
     # the natural order's upper pattern is A's own: counted on A, built only where it wins
-    parent2, lnz2, total2 = _etree(n, indptr, indices, total)
+    parent2, lnz2, total2 = _etree(n, indptr, indices, budget)
     if total2 >= 0:
-        perm, parent, lnz = np.arange(n), parent2, lnz2
+        won, perm, parent, lnz = True, np.arange(n), parent2, lnz2
         ap, ai, src = _permuted_upper_kernel(n, indptr, indices, perm)
+    if not won:
+        none = np.empty(0, dtype=np.int64)
+        return False, none, none, none, none, none, none, none, none, none, none
+    lp, rp, rc, rpos, li = _completed(n, ap, ai, parent, lnz)
+    return True, perm, ap, ai, src, parent, lp, rp, rc, rpos, li
+
+
+@njit(cache=True)
+def _completed(n, ap, ai, parent, lnz):
+    """L's column pointers ``lp`` from its column counts, and the row patterns: (lp, rp, rc,
+    rpos, li)."""
     lp = np.zeros(n + 1, dtype=np.int64)
     for k in range(n):
         lp[k + 1] = lp[k] + lnz[k]
     rp, rc, rpos, li = _row_patterns(n, ap, ai, parent, lp)
-    return perm, ap, ai, src, parent, lp, rp, rc, rpos, li
+    return lp, rp, rc, rpos, li
